@@ -1,0 +1,53 @@
+"""Options shared by several subcommands."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+
+from ..config import FrameConfig, get_preset, load_config
+
+__all__ = ["add_config_options", "config_from_args", "command_line"]
+
+
+def add_config_options(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("frame configuration")
+    group.add_argument("--preset", default="jmse2024", help="named preset (default: jmse2024; see `seamodem config --list`)")
+    group.add_argument("--config", metavar="FILE", help="TOML or JSON file (or a sidecar) whose values override the preset")
+    group.add_argument(
+        "--set",
+        metavar="KEY=VALUE",
+        action="append",
+        default=[],
+        help="override one configuration value, e.g. --set rolloff=0.25 (repeatable)",
+    )
+
+
+def _parse_value(text: str):
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def config_from_args(args: argparse.Namespace) -> FrameConfig:
+    """Preset, then ``--config`` file, then ``--set`` overrides."""
+    config = get_preset(args.preset)
+    if args.config:
+        config = load_config(args.config, base=config)
+    overrides = {}
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise ValueError(f"--set: expected KEY=VALUE, got {item!r}")
+        overrides[key.strip()] = _parse_value(value.strip())
+    if overrides:
+        config = FrameConfig.from_dict(overrides, base=config)
+    return config
+
+
+def command_line() -> str:
+    """This invocation, as a shell command, for the sidecars."""
+    return shlex.join(["seamodem", *sys.argv[1:]])

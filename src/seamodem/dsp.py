@@ -1,0 +1,80 @@
+"""Passband ↔ complex baseband conversion and the low-pass filters it needs.
+
+Convention (as arlpy): x_pb(t) = Re[x_bb(t) · exp(+j2π fc t)], a positive-frequency
+carrier; ``pb2bb`` returns the complex envelope x_bb (hence its factor 2).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import scipy.signal
+
+__all__ = ["bb2pb", "pb2bb", "lowpass_taps"]
+
+
+@lru_cache(maxsize=32)
+def lowpass_taps(fs: float, passband_hz: float, stopband_hz: float, attenuation_db: float = 90.0) -> np.ndarray:
+    """Odd-length linear-phase Kaiser low-pass FIR (delay (n − 1)/2 samples).
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    passband_hz, stopband_hz : float
+        Edges of the transition band [Hz], 0 < passband < stopband < fs/2.
+    attenuation_db : float
+        Stop-band attenuation [dB].
+    """
+    if not 0 < passband_hz < stopband_hz < fs / 2:
+        raise ValueError(
+            f"need 0 < passband_hz < stopband_hz < fs/2 = {fs / 2:g}, got {passband_hz!r}, {stopband_hz!r}"
+        )
+    width = (stopband_hz - passband_hz) / (fs / 2)
+    numtaps, beta = scipy.signal.kaiserord(attenuation_db, width)
+    numtaps |= 1
+    taps = scipy.signal.firwin(numtaps, (passband_hz + stopband_hz) / 2, window=("kaiser", beta), fs=fs)
+    taps.setflags(write=False)
+    return taps
+
+
+def bb2pb(x_bb: np.ndarray, fs: float, fc: float, *, t0_s: float = 0.0) -> np.ndarray:
+    """Re[x_bb · exp(j2π fc t)] with t = t0 + n/fs [s]."""
+    t = t0_s + np.arange(len(x_bb)) / fs
+    return np.real(np.asarray(x_bb) * np.exp(2j * np.pi * fc * t))
+
+
+def pb2bb(
+    x_pb: np.ndarray,
+    fs: float,
+    fc: float,
+    *,
+    passband_hz: float,
+    stopband_hz: float,
+    t0_s: float = 0.0,
+    attenuation_db: float = 90.0,
+) -> np.ndarray:
+    """Complex envelope of a real passband signal (zero-phase low-pass).
+
+    Parameters
+    ----------
+    x_pb : numpy.ndarray, shape (n_samples,)
+        Real passband samples.
+    fs, fc : float
+        Sample rate and carrier [Hz].
+    passband_hz, stopband_hz : float
+        Low-pass edges [Hz] around baseband 0 Hz: keep |f| < passband, reject
+        |f| > stopband (e.g. the tone offset from the carrier).
+    t0_s : float
+        Time of the first sample [s] (carrier phase reference).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_samples,), complex
+        x_bb, with x_pb ≈ Re[x_bb e^{j2π fc t}] in band.
+    """
+    t = t0_s + np.arange(len(x_pb)) / fs
+    mixed = 2.0 * np.asarray(x_pb) * np.exp(-2j * np.pi * fc * t)
+    taps = lowpass_taps(float(fs), float(passband_hz), float(stopband_hz), float(attenuation_db))
+    return scipy.signal.oaconvolve(mixed, taps, mode="same")
