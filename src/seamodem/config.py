@@ -24,6 +24,7 @@ __all__ = [
     "get_preset",
     "load_config",
     "save_config",
+    "config_text",
     "config_to_toml",
 ]
 
@@ -382,8 +383,12 @@ def load_config(path: str | Path, *, base: FrameConfig | None = None) -> FrameCo
     return FrameConfig.from_dict(_read_mapping(Path(path)), base=base)
 
 
+def config_text(config: FrameConfig, suffix: str) -> str:
+    """The configuration as TOML for a ``.toml`` suffix, else as JSON."""
+    return config.to_toml() if suffix.lower() == ".toml" else config.to_json() + "\n"
+
+
 def save_config(config: FrameConfig, path: str | Path) -> None:
     """Write a configuration as TOML (``.toml``) or JSON (any other suffix)."""
     path = Path(path)
-    text = config.to_toml() if path.suffix.lower() == ".toml" else config.to_json() + "\n"
-    path.write_text(text, encoding="utf-8")
+    path.write_text(config_text(config, path.suffix), encoding="utf-8")

@@ -41,6 +41,10 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``seamodem``; returns the exit code."""
+    from ._common import set_argv
+
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    set_argv(argv)
     parser = _parser()
     args = parser.parse_args(argv)
     prefix = f"seamodem {args.command}: error:"

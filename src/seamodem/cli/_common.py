@@ -48,6 +48,15 @@ def config_from_args(args: argparse.Namespace) -> FrameConfig:
     return config
 
 
+_ARGV: list[str] | None = None
+
+
+def set_argv(argv: list[str]) -> None:
+    """Remember the arguments of this invocation (called by :func:`seamodem.cli.main`)."""
+    global _ARGV
+    _ARGV = list(argv)
+
+
 def command_line() -> str:
     """This invocation, as a shell command, for the sidecars."""
-    return shlex.join(["seamodem", *sys.argv[1:]])
+    return shlex.join(["seamodem", *(sys.argv[1:] if _ARGV is None else _ARGV)])

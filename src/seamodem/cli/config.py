@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..config import PRESET_NOTES, PRESETS, save_config
+from ..config import PRESET_NOTES, PRESETS, config_text
 from ..io.files import atomic_outputs, check_writable
 from ._common import add_config_options, config_from_args
 
@@ -31,8 +31,7 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         out = check_writable(Path(args.output))
         with atomic_outputs(out) as (tmp,):
-            save_config(config, tmp.with_suffix(out.suffix))
-            tmp.with_suffix(out.suffix).replace(tmp)
+            tmp.write_text(config_text(config, out.suffix), encoding="utf-8")
         print(f"wrote {out}")
         return 0
     print(config.to_toml(), end="")

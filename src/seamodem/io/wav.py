@@ -30,17 +30,45 @@ def write_wav_blocks(path: str | Path, blocks: Iterable[np.ndarray], *, fs: int,
     return n
 
 
+def _check_riff_complete(path: Path) -> None:
+    """Raise if a RIFF/WAVE file's data chunk is shorter than its header says.
+
+    libsndfile silently reads what is there; a cut recording must not pass for a whole one.
+    """
+    size = path.stat().st_size
+    with open(path, "rb") as f:
+        head = f.read(12)
+        if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"WAVE":
+            return
+        pos = 12
+        while pos + 8 <= size:
+            f.seek(pos)
+            chunk = f.read(8)
+            declared = int.from_bytes(chunk[4:8], "little")
+            if chunk[:4] == b"data":
+                available = size - pos - 8
+                if available < declared:
+                    raise InputFileError(
+                        f"recording {path} is truncated: its data chunk declares {declared} bytes, "
+                        f"only {available} are present"
+                    )
+                return
+            pos += 8 + declared + (declared & 1)
+
+
 def wav_info(path: str | Path) -> soundfile._SoundFileInfo:
-    """Header of an audio file, with a one-line error for a missing or unreadable file."""
+    """Header of an audio file, with a one-line error for a missing, empty, truncated or unreadable file."""
     path = Path(path)
     if not path.is_file():
         raise InputFileError(f"recording not found: {path}")
     if path.stat().st_size == 0:
         raise InputFileError(f"recording {path} is empty (0 bytes)")
     try:
-        return soundfile.info(str(path))
+        info = soundfile.info(str(path))
     except (soundfile.LibsndfileError, RuntimeError) as exc:
         raise InputFileError(f"recording {path} is not a readable audio file: {exc}") from None
+    _check_riff_complete(path)
+    return info
 
 
 def read_wav(path: str | Path, *, channel: int | None = None) -> tuple[np.ndarray, int]:
