@@ -1,0 +1,1 @@
+"""Navigation: the papers' estimators as consumers of the receiver's measurements."""

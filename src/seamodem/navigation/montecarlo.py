@@ -1,0 +1,436 @@
+"""Monte Carlo reproduction of paper 000 §4.1 (Tables 3 and 4): proposed EKF versus ROSB.
+
+Each run simulates a whole boustrophedon mission: the vehicle follows the path
+with the feedback-linearization controller (eq 2), the IMU/AHRS and the acoustic
+frames are emulated from the true geometry with the noise of :class:`NoiseModel`,
+and the 6-state EKF (eq 5–7, 18–25) estimates the position. Runs are
+independent, seeded by (seed, run index) — the same noise for every T_com and
+both filters (common random numbers), so differences between rows and filters
+are not sampling noise — and spread over all local cores (the compiled kernel
+releases the GIL, so threads suffice).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ConfigError
+from ._kernels import NOISE_COLUMNS, mission_kernel
+from .ekf import ExtendedKalmanFilter
+from .models import Auv6Model, closing_speed
+from .trajectories import boustrophedon
+from .vehicle import feedback_command, vehicle_step
+
+__all__ = [
+    "NoiseModel",
+    "MissionConfig",
+    "MonteCarloResult",
+    "PAPER_TABLE",
+    "FILTERS",
+    "mission_noise",
+    "simulate_mission",
+    "simulate_mission_reference",
+    "run_monte_carlo",
+    "summarize_runs",
+    "outlier_mask",
+    "format_table",
+]
+
+#: Filters of the reproduction: the paper's proposal (range + v_r) and the ROSB baseline (range only).
+FILTERS = ("proposed", "rosb")
+
+#: Paper 000 Tables 3 and 4: T_com → (mean error [m], outliers, variance [m²], %etd max, %etd mean,
+#: ROSB mean error [m], ROSB outliers).
+PAPER_TABLE = {
+    3.0: (3.6054, 1, 1.7549, 0.5268, 0.2281, 4.5870, 4),
+    6.0: (5.0440, 5, 3.2143, 0.5850, 0.3152, 6.2255, 6),
+    9.0: (6.4518, 1, 6.2173, 0.7662, 0.4032, 7.7197, 5),
+    12.0: (8.0853, 6, 12.7455, 1.0938, 0.5053, 9.2462, 15),
+    15.0: (9.5457, 6, 18.3823, 1.3950, 0.5966, 10.6684, 10),
+    20.0: (12.1322, 6, 33.9161, 1.7825, 0.7583, 12.9695, 29),
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class NoiseModel:
+    """Standard deviations of the emulated measurements.
+
+    Defaults are the square roots of the filter's R (paper 000 eq 25), i.e. a
+    filter that is told the truth about its sensors, and the AHRS figures of
+    paper 000 §3.5.3 (1° white heading noise, 5°/h bias instability). The paper
+    shows its noises only as box plots (Fig. 6); these are our stated choice.
+
+    Parameters
+    ----------
+    sigma_range_m : float
+        Range noise [m] (√12 = 3.46 m).
+    sigma_vr_mps : float
+        Closing-speed noise [m/s] (√0.2 = 0.447 m/s).
+    sigma_heading_deg : float
+        White heading noise [deg].
+    heading_drift_deg_per_h : float
+        Heading bias random walk: its standard deviation after one hour [deg].
+    sigma_omega_rad_s : float
+        Gyro white noise [rad/s] (√0.005 = 0.0707, inside the paper's ±0.1 s⁻¹).
+    sigma_accel_mps2 : float
+        Accelerometer white noise [m/s²] (√0.005, inside the paper's ±0.1 m/s²).
+    """
+
+    sigma_range_m: float = math.sqrt(12.0)
+    sigma_vr_mps: float = math.sqrt(0.2)
+    sigma_heading_deg: float = 1.0
+    heading_drift_deg_per_h: float = 5.0
+    sigma_omega_rad_s: float = math.sqrt(0.005)
+    sigma_accel_mps2: float = math.sqrt(0.005)
+
+    def __post_init__(self):
+        for name in self.__dataclass_fields__:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ConfigError(name, f"must be finite and >= 0, got {value!r}")
+
+    def sigmas(self, dt_s: float) -> np.ndarray:
+        """Per-step standard deviations in :data:`NOISE_COLUMNS` order (SI units)."""
+        return np.array(
+            [
+                math.radians(self.sigma_heading_deg),
+                self.sigma_omega_rad_s,
+                self.sigma_accel_mps2,
+                math.radians(self.heading_drift_deg_per_h) * math.sqrt(dt_s / 3600.0),
+                self.sigma_range_m,
+                self.sigma_vr_mps,
+            ]
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class MissionConfig:
+    """One simulated mission of paper 000 §4.1.
+
+    Parameters
+    ----------
+    tcom_s : float
+        Period of the acoustic frames [s]; must be a multiple of ``dt_s``.
+    dt_s : float
+        Filter and simulation step [s] (Table 2: 0.25 s).
+    beacon_xy : tuple
+        Beacon position [m] (Table 2: (50, 100)).
+    r_diag : tuple
+        Filter R for (d, v_r, ψ, Ω, a) — eq 25's diag(1, 0.005, 0.005, 12, 0.2)
+        in eq 18's order.
+    q : float or None
+        Process noise variance per state and step; ``None`` means Δt⁸ (eq 25).
+    p0_diag : tuple
+        Initial covariance diagonal (not printed in paper 000; I₆ as in papers 002–003).
+    steer_on_estimate : bool
+        The controller steers on the filter's estimate (a real vehicle) rather than on the truth.
+    v_min_mps, v_max_mps : float
+        Vehicle speed limits (Table 2: |v| ≤ 3 m/s; v ≥ 0.1 m/s keeps eq 2 regular).
+    omega_max_rad_s, accel_max_mps2 : float
+        Actuator limits of the controller (not in the paper; our choice for a
+        micro-AUV: 0.5 rad/s, 0.5 m/s²). Without them, steering on the estimate
+        turns each range correction into a step command the filter's
+        near-constant-acceleration model (Q = Δt⁸) cannot follow.
+    noise : NoiseModel
+        Emulated measurement noise.
+    path : dict
+        Keyword arguments of :func:`~seamodem.navigation.trajectories.boustrophedon`.
+    """
+
+    tcom_s: float = 3.0
+    dt_s: float = 0.25
+    beacon_xy: tuple = (50.0, 100.0)
+    r_diag: tuple = (12.0, 0.2, 1.0, 0.005, 0.005)
+    q: float | None = None
+    p0_diag: tuple = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
+    steer_on_estimate: bool = True
+    v_min_mps: float = 0.1
+    v_max_mps: float = 3.0
+    omega_max_rad_s: float = 0.5
+    accel_max_mps2: float = 0.5
+    noise: NoiseModel = field(default_factory=NoiseModel)
+    path: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not self.dt_s > 0:
+            raise ConfigError("dt_s", f"must be > 0 s, got {self.dt_s!r}")
+        ratio = self.tcom_s / self.dt_s
+        if not (self.tcom_s > 0 and abs(ratio - round(ratio)) < 1e-9):
+            raise ConfigError("tcom_s", f"must be a positive multiple of dt_s = {self.dt_s} s, got {self.tcom_s!r}")
+        if len(self.r_diag) != 5 or min(self.r_diag) <= 0:
+            raise ConfigError("r_diag", f"must be 5 positive variances (d, v_r, ψ, Ω, a), got {self.r_diag!r}")
+        if len(self.p0_diag) != 6 or min(self.p0_diag) <= 0:
+            raise ConfigError("p0_diag", f"must be 6 positive variances, got {self.p0_diag!r}")
+
+    @property
+    def process_variance(self) -> float:
+        return self.dt_s**8 if self.q is None else float(self.q)
+
+    @property
+    def com_every(self) -> int:
+        return int(round(self.tcom_s / self.dt_s))
+
+    def reference(self):
+        """Desired path sampled at every step: array (n + 1, 6) and the path object."""
+        path = boustrophedon(**self.path)
+        n = int(round(path.duration_s / self.dt_s))
+        sample = path.sample(np.arange(n + 1) * self.dt_s)
+        return np.hstack([sample.position, sample.velocity, sample.acceleration]), path
+
+
+def mission_noise(seed: int, run: int, n_steps: int) -> np.ndarray:
+    """Standard normals of run ``run``, shape (n_steps + 1, 6), from ``default_rng([seed, run])``."""
+    return np.random.default_rng([seed, run]).standard_normal((n_steps + 1, len(NOISE_COLUMNS)))
+
+
+def _start_state(reference: np.ndarray) -> np.ndarray:
+    """True initial state: on the path, heading and speed along it."""
+    vx, vy = reference[0, 2], reference[0, 3]
+    return np.array([reference[0, 0], reference[0, 1], math.atan2(vy, vx), math.hypot(vx, vy)])
+
+
+def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = "proposed", reference=None):
+    """One mission with the compiled kernel: (error (n+1,), estimate (n+1, 2), truth (n+1, 2)) [m]."""
+    if filter not in FILTERS:
+        raise ConfigError("filter", f"must be one of {FILTERS}, got {filter!r}")
+    if reference is None:
+        reference, _ = config.reference()
+    return mission_kernel(
+        reference,
+        noise,
+        _start_state(reference),
+        config.noise.sigmas(config.dt_s),
+        np.asarray(config.r_diag, dtype=float),
+        np.asarray(config.p0_diag, dtype=float),
+        np.asarray(config.beacon_xy, dtype=float),
+        config.dt_s,
+        config.process_variance,
+        config.com_every,
+        filter == "proposed",
+        config.steer_on_estimate,
+        config.v_min_mps,
+        config.v_max_mps,
+        config.omega_max_rad_s,
+        config.accel_max_mps2,
+    )
+
+
+def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filter: str = "proposed",
+                               reference=None, filter_factory=None):
+    """The same mission as :func:`simulate_mission`, written with the general EKF class.
+
+    This is the pure-Python form the compiled kernel is tested against (and the
+    timing reference of ``benchmarks/bench_navigation.py``). ``filter_factory``
+    (x0, P0, Q, model) → object with ``predict(t_s)`` / ``update(z, kind, R)`` and
+    ``x`` lets the benchmark plug in another EKF implementation.
+    """
+    if reference is None:
+        reference, _ = config.reference()
+    n = reference.shape[0] - 1
+    sig = config.noise.sigmas(config.dt_s)
+    dt = config.dt_s
+    model = Auv6Model(config.beacon_xy)
+    x, y, psi, v = _start_state(reference)
+    x0 = np.array([x, y, psi, v, 0.0, 0.0])
+    P0 = np.diag(config.p0_diag)
+    Q = config.process_variance * np.eye(6)
+    factory = filter_factory or (lambda x0, P0, Q, model: ExtendedKalmanFilter(model, x0, P0, Q))
+    ekf = factory(x0, P0, Q, model)
+    r = dict(zip(("range", "v_r", "psi", "omega", "a"), config.r_diag))
+    kind = "com" if filter == "proposed" else "rosb"
+    R_com = np.diag([r[c] for c in model.kinds[kind]])
+    R_ahrs = np.diag([r[c] for c in model.kinds["ahrs"]])
+    error, estimate, truth = np.zeros(n + 1), np.zeros((n + 1, 2)), np.zeros((n + 1, 2))
+    estimate[0], truth[0] = x0[:2], (x, y)
+    bias = 0.0
+
+    def command(k):
+        s = ekf.x[:4] if config.steer_on_estimate else (x, y, psi, v)
+        return feedback_command(*s, *reference[k], config.v_min_mps, config.omega_max_rad_s, config.accel_max_mps2)
+
+    omega, accel = command(0)
+    for k in range(1, n + 1):
+        v_old = v
+        x, y, psi, v = vehicle_step(x, y, psi, v, omega, accel, dt, config.v_min_mps, config.v_max_mps)
+        ekf.predict(k * dt)
+        bias += sig[3] * noise[k, 3]
+        ahrs = [psi + bias + sig[0] * noise[k, 0], omega + sig[1] * noise[k, 1], (v - v_old) / dt + sig[2] * noise[k, 2]]
+        if k % config.com_every == 0:
+            d = math.hypot(x - config.beacon_xy[0], y - config.beacon_xy[1]) + sig[4] * noise[k, 4]
+            vr = float(closing_speed(x, y, psi, v, config.beacon_xy)) + sig[5] * noise[k, 5]
+            ekf.update([d, vr, *ahrs] if kind == "com" else [d, *ahrs], kind, R_com)
+        else:
+            ekf.update(ahrs, "ahrs", R_ahrs)
+        estimate[k], truth[k] = ekf.x[:2], (x, y)
+        error[k] = math.hypot(*(estimate[k] - truth[k]))
+        omega, accel = command(k)
+    return error, estimate, truth
+
+
+def outlier_mask(values: np.ndarray) -> np.ndarray:
+    """True for values outside [q1 − 1.5·IQR, q3 + 1.5·IQR] (paper 000 §4.1.1, lower bound as corrected in SPEC §5)."""
+    q1, q3 = np.percentile(values, [25, 75])
+    iqr = q3 - q1
+    return (values < q1 - 1.5 * iqr) | (values > q3 + 1.5 * iqr)
+
+
+def summarize_runs(mean_error: np.ndarray, var_error: np.ndarray, max_error: np.ndarray,
+                   travelled: np.ndarray) -> dict:
+    """One row of Table 3 from per-run statistics; outliers counted then excluded.
+
+    ``mean_error``, ``var_error``, ``max_error`` are each run's mean, variance and
+    maximum of the position error over time [m, m², m]; ``travelled`` each run's
+    travelled distance [m]. %etd = error / travelled distance × 100.
+    """
+    out = outlier_mask(mean_error)
+    keep = ~out
+    return {
+        "mean_error_m": float(mean_error[keep].mean()),
+        "error_variance_m2": float(var_error[keep].mean()),
+        "etd_max_pct": float((100 * max_error[keep] / travelled[keep]).mean()),
+        "etd_mean_pct": float((100 * mean_error[keep] / travelled[keep]).mean()),
+        "outliers": int(out.sum()),
+    }
+
+
+@dataclass
+class MonteCarloResult:
+    """Table rows plus what the figures need.
+
+    ``rows``: list of dicts with ``tcom_s, filter`` and the :func:`summarize_runs` keys.
+    ``mean_error_curve[(tcom, filter)]``: error averaged over the non-outlier runs, (n + 1,) [m].
+    ``mean_track[(tcom, filter)]``: estimated track averaged over the same runs, (n + 1, 2) [m].
+    ``per_run_mean_error[(tcom, filter)]``: each run's mean error, (runs,) [m].
+    """
+
+    config: MissionConfig
+    tcoms: tuple
+    runs: int
+    seed: int
+    rows: list
+    t_s: np.ndarray
+    truth_track: np.ndarray
+    mean_error_curve: dict
+    mean_track: dict
+    per_run_mean_error: dict
+    wall_time_s: float = 0.0
+
+
+def _run_chunk(config, reference, filter, seed, runs):
+    n = reference.shape[0] - 1
+    stats = np.empty((len(runs), 4))
+    curves = np.empty((len(runs), n + 1))
+    track_sum = np.zeros((len(runs), n + 1, 2), dtype=np.float32)
+    truth = None
+    for i, run in enumerate(runs):
+        error, estimate, truth = simulate_mission(config, mission_noise(seed, run, n), filter=filter,
+                                                  reference=reference)
+        travelled = np.sum(np.hypot(*np.diff(truth, axis=0).T))
+        stats[i] = error.mean(), error.var(), error.max(), travelled
+        curves[i] = error
+        track_sum[i] = estimate
+    return stats, curves, track_sum, truth
+
+
+def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs: int = 300, seed: int = 0,
+                    filters=FILTERS, workers: int | None = None, progress=None) -> MonteCarloResult:
+    """Reproduce paper 000 Tables 3–4: every (T_com, filter) pair over ``runs`` seeded missions.
+
+    Parameters
+    ----------
+    config : MissionConfig
+        Everything but ``tcom_s``, which takes each value of ``tcoms`` [s].
+    runs : int
+        Missions per row (paper: 300).
+    seed : int
+        Run ``r`` draws its noise from ``default_rng([seed, r])``.
+    workers : int, optional
+        Threads (default: all local cores).
+    progress : callable, optional
+        Called with the number of runs finished, after each chunk.
+    """
+    import time
+
+    if runs < 4:
+        raise ConfigError("runs", f"must be >= 4 (quartiles for the outlier rule), got {runs!r}")
+    for f in filters:
+        if f not in FILTERS:
+            raise ConfigError("filter", f"must be one of {FILTERS}, got {f!r}")
+    configs = {float(t): replace(config, tcom_s=float(t)) for t in tcoms}
+    reference, _ = config.reference()
+    workers = workers or os.cpu_count() or 1
+    chunk = max(1, min(25, runs // workers))
+    tasks = [(t, f, range(a, min(a + chunk, runs))) for t in configs for f in filters for a in range(0, runs, chunk)]
+    start = time.perf_counter()
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = [(t, f, pool.submit(_run_chunk, configs[t], reference, f, seed, r)) for t, f, r in tasks]
+        parts: dict = {}
+        truth = None
+        for t, f, fut in futures:
+            stats, curves, tracks, truth = fut.result()
+            parts.setdefault((t, f), []).append((stats, curves, tracks))
+            if progress is not None:
+                progress(len(stats))
+    wall = time.perf_counter() - start
+    rows, curves_out, tracks_out, per_run = [], {}, {}, {}
+    for (t, f), pieces in parts.items():
+        stats = np.vstack([p[0] for p in pieces])
+        keep = ~outlier_mask(stats[:, 0])
+        curves_out[(t, f)] = np.vstack([p[1] for p in pieces])[keep].mean(axis=0)
+        tracks_out[(t, f)] = np.concatenate([p[2] for p in pieces])[keep].mean(axis=0)
+        per_run[(t, f)] = stats[:, 0]
+        rows.append({"tcom_s": t, "filter": f, **summarize_runs(*stats.T)})
+    rows.sort(key=lambda r: (r["tcom_s"], FILTERS.index(r["filter"])))
+    n = reference.shape[0] - 1
+    return MonteCarloResult(config, tuple(configs), runs, seed, rows, np.arange(n + 1) * config.dt_s, truth,
+                            curves_out, tracks_out, per_run, wall)
+
+
+def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
+    """Tables 3 and 4 in the paper's layout, with the paper's values beside ours when ``paper``."""
+    by = {(r["tcom_s"], r["filter"]): r for r in result.rows}
+    noise = result.config.noise
+    lines = [
+        f"Monte Carlo, {result.runs} runs per row, seed {result.seed}, dt = {result.config.dt_s} s, "
+        f"controller steers on the {'estimate' if result.config.steer_on_estimate else 'truth'}",
+        f"noise: range {noise.sigma_range_m:.3g} m, v_r {noise.sigma_vr_mps:.3g} m/s, heading "
+        f"{noise.sigma_heading_deg:.3g} deg + {noise.heading_drift_deg_per_h:.3g} deg/h random walk, gyro "
+        f"{noise.sigma_omega_rad_s:.3g} rad/s, accel {noise.sigma_accel_mps2:.3g} m/s^2; "
+        f"filter R = {result.config.r_diag} (d, v_r, psi, omega, a), Q = {result.config.process_variance:.3g} I6",
+        "",
+        "Table 3 (proposed filter)",
+        f"{'T_com':>6} | {'mean error (outliers) m':>24} | {'variance m2':>11} | {'%etd max':>8} | {'%etd mean':>9}"
+        + (f" || {'paper mean (out)':>17} | {'paper var':>9} | {'max':>6} | {'mean':>6} | {'ratio':>5}" if paper else ""),
+    ]
+    for t in result.tcoms:
+        r = by.get((t, "proposed"))
+        if r is None:
+            continue
+        line = (f"{t:>5g}s | {r['mean_error_m']:>18.4f} ({r['outliers']:>3}) | {r['error_variance_m2']:>11.4f} | "
+                f"{r['etd_max_pct']:>8.4f} | {r['etd_mean_pct']:>9.4f}")
+        if paper and t in PAPER_TABLE:
+            p = PAPER_TABLE[t]
+            line += (f" || {p[0]:>11.4f} ({p[1]:>3}) | {p[2]:>9.4f} | {p[3]:>6.4f} | {p[4]:>6.4f} | "
+                     f"{r['mean_error_m'] / p[0]:>5.2f}")
+        lines.append(line)
+    lines += ["", "Table 4 (proposed vs ROSB)",
+              f"{'T_com':>6} | {'proposed m (out)':>17} | {'ROSB m (out)':>17}"
+              + (f" || {'paper proposed':>15} | {'paper ROSB':>15} | {'ratio ROSB':>10}" if paper else "")]
+    for t in result.tcoms:
+        a, b = by.get((t, "proposed")), by.get((t, "rosb"))
+        if a is None or b is None:
+            continue
+        line = (f"{t:>5g}s | {a['mean_error_m']:>11.4f} ({a['outliers']:>3}) | "
+                f"{b['mean_error_m']:>11.4f} ({b['outliers']:>3})")
+        if paper and t in PAPER_TABLE:
+            p = PAPER_TABLE[t]
+            line += (f" || {p[0]:>9.4f} ({p[1]:>2}) | {p[5]:>9.4f} ({p[6]:>2}) | "
+                     f"{b['mean_error_m'] / p[5]:>10.2f}")
+        lines.append(line)
+    lines.append(f"wall time {result.wall_time_s:.1f} s")
+    return "\n".join(lines)
