@@ -1,0 +1,70 @@
+"""From equalised data symbols to payload bytes: demap, descramble, deinterleave, Viterbi, CRC."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..config import FrameConfig
+from ..transmit.coding import interleaver_permutation, parse_info_block, pn9_sequence
+from .demap import soft_demap
+from .viterbi import viterbi_decode
+
+__all__ = ["DecodedPayload", "code_order_llr", "decode_payload"]
+
+
+@dataclass(frozen=True)
+class DecodedPayload:
+    """Outcome of decoding one frame's data.
+
+    Attributes
+    ----------
+    payload : bytes
+        Decoded payload (meaningful only when ``crc_ok``).
+    crc_ok : bool
+        The frame check passed; bytes are never reported valid otherwise.
+    info_bits : numpy.ndarray
+        Decoded information block (for bit-error counting).
+    """
+
+    payload: bytes
+    crc_ok: bool
+    info_bits: np.ndarray
+
+
+def code_order_llr(llr_air: np.ndarray, config: FrameConfig) -> np.ndarray:
+    """Undo the scrambler (sign flips) and the interleaver on LLRs in on-air order."""
+    n = config.n_coded_bits
+    llr = np.asarray(llr_air, dtype=float)[:n] * (1.0 - 2.0 * pn9_sequence(n))
+    if config.fec == "none":
+        return llr
+    out = np.empty(n)
+    out[interleaver_permutation(n)] = llr
+    return out
+
+
+def decode_payload(data_symbols: np.ndarray, noise_var: float | np.ndarray, config: FrameConfig) -> DecodedPayload:
+    """Decode a frame's ``n_data`` equalised data symbols.
+
+    Parameters
+    ----------
+    data_symbols : numpy.ndarray, shape (n_data,), complex
+    noise_var : float or numpy.ndarray
+        Complex noise variance per symbol (after equalisation), for the LLRs.
+    config : FrameConfig
+
+    Returns
+    -------
+    DecodedPayload
+    """
+    data_symbols = np.asarray(data_symbols)
+    if data_symbols.shape != (config.n_data,):
+        raise ValueError(f"expected {config.n_data} data symbols, got shape {data_symbols.shape}")
+    llr = code_order_llr(soft_demap(data_symbols, noise_var, config.modulation), config)
+    if config.fec == "none":
+        info = (llr[: config.n_info_bits] < 0).astype(np.uint8)
+    else:
+        info = viterbi_decode(llr, config.n_info_bits)
+    payload, ok = parse_info_block(info, config)
+    return DecodedPayload(payload, ok, info)
