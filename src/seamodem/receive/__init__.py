@@ -1,0 +1,1 @@
+"""Receiver: front end, detection, time of flight, Doppler, compensation, measurement records."""

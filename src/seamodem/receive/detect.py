@@ -1,0 +1,223 @@
+"""Frame detection: a bank of Doppler-shifted pilot matched filters on the data baseband.
+
+Statistic and threshold
+-----------------------
+For each lag j and Doppler bin b, c_b[j] = Σ_i r[j + i] p_b*[i], with p_b the
+pilot's baseband waveform shifted by the bin's carrier offset f_b (the Doppler
+f0·v/c would otherwise turn the pilot's phase by several cycles at a few m/s).
+
+* z = |c|² / σ_c², σ_c² = median(|c|²)/ln 2 over about a second of lags and
+  all bins. In white Gaussian noise |c|²/σ_c² is Exp(1), so P(z > η) = e^{−η}
+  per test. With n = (bins)·fs·3600 tests per hour (an over-count: neighbouring
+  lags are correlated) the threshold η = ln(n / rate) gives at most ``rate``
+  false alarms per hour. The median ignores the sparse pilot peaks and
+  impulses.
+* ρ = |c|² / (E_p · Σ_window |r|²) ∈ [0, 1] (Cauchy–Schwarz), the normalised
+  correlation: it is near 1/Np for an impulse, however loud, and ≈ S/(S+N)
+  for a frame. Requiring ρ ≥ ρ_min rejects impulsive noise that passes z.
+
+First arrival
+-------------
+After the first lag that passes both tests, the strongest peak within
+``multipath_window_s`` is found; the frame's arrival is the earliest local
+maximum before it whose amplitude is at least ``first_path_fraction`` of the
+strongest (a weaker direct path ahead of a stronger surface echo). The next
+frame is sought only ``holdoff_s`` later, so each frame is found once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from ..config import FrameConfig
+from ..transmit.pilot import pilot_symbols
+from ..transmit.pulse import srrc_matrix
+
+__all__ = ["Detection", "PilotDetector", "pilot_template", "z_threshold"]
+
+
+@dataclass(frozen=True)
+class Detection:
+    """A coarse frame detection.
+
+    Attributes
+    ----------
+    t_start_s : float
+        Coarse reception time of the frame start [s] (± half a baseband sample).
+    doppler_hz : float
+        Doppler bin: carrier offset f0·v/c of the best replica [Hz].
+    z : float
+        Detection statistic |c|²/σ_c² (Exp(1) in noise).
+    rho : float
+        Normalised correlation in [0, 1].
+    """
+
+    t_start_s: float
+    doppler_hz: float
+    z: float
+    rho: float
+
+
+def pilot_template(config: FrameConfig, fs: float, pilot: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    """Baseband pilot Σ a_k √T g(τ − (Ng + k)T) sampled at τ = τ_a + i/fs.
+
+    Returns
+    -------
+    template : numpy.ndarray, complex
+    tau_a_s : float
+        Time of the template's first sample after the frame start [s].
+    """
+    if pilot is None:
+        pilot = pilot_symbols(config.n_pilot, config.pilot_seed)
+    T = config.symbol_period_s
+    half = config.srrc_span_symbols // 2
+    tk = (config.n_guard + np.arange(config.n_pilot)) * T
+    tau_a = tk[0] - half * T
+    n = int(math.floor((tk[-1] + half * T - tau_a) * fs)) + 1
+    tau = tau_a + np.arange(n) / fs
+    g = srrc_matrix(tau, tk, symbol_period_s=T, rolloff=config.rolloff, span_symbols=config.srrc_span_symbols)
+    return g @ np.asarray(pilot, dtype=complex), float(tau_a)
+
+
+def z_threshold(false_alarms_per_hour: float, n_bins: int, fs: float) -> float:
+    """η with (tests per hour)·e^{−η} = false_alarms_per_hour."""
+    return float(math.log(n_bins * fs * 3600.0 / false_alarms_per_hour))
+
+
+class PilotDetector:
+    """Find frame starts in a stream of data-band baseband samples.
+
+    Parameters
+    ----------
+    config : FrameConfig
+    fs : float
+        Baseband sample rate [Hz].
+    v_max_mps : float
+        Doppler bins cover ±v_max [m/s].
+    sound_speed_mps : float
+    false_alarms_per_hour : float
+        Design false-alarm rate in white Gaussian noise; sets η.
+    min_rho : float
+        Smallest normalised correlation of a frame.
+    first_path_fraction : float
+        A peak before the strongest one counts as the first arrival when its
+        amplitude is at least this fraction of the strongest.
+    multipath_window_s : float
+        How far after the first crossing later, stronger paths are sought [s].
+    pilot : numpy.ndarray, optional
+        Pilot symbols (default from the config's seed).
+    """
+
+    def __init__(
+        self,
+        config: FrameConfig,
+        fs: float,
+        *,
+        v_max_mps: float,
+        sound_speed_mps: float,
+        false_alarms_per_hour: float = 0.01,
+        min_rho: float = 0.05,
+        first_path_fraction: float = 0.3,
+        multipath_window_s: float = 0.03,
+        pilot: np.ndarray | None = None,
+    ):
+        self.config = config
+        self.fs = float(fs)
+        template, self.tau_a_s = pilot_template(config, fs, pilot)
+        pilot_s = config.n_pilot * config.symbol_period_s
+        # bins every 1/(2 T_p): worst-case loss sinc²(1/4) = −0.9 dB
+        spacing = 1.0 / (2 * pilot_s)
+        f_max = config.carrier_hz * v_max_mps / sound_speed_mps
+        n_side = int(math.ceil(f_max / spacing))
+        self.doppler_hz = spacing * np.arange(-n_side, n_side + 1)
+        tau = self.tau_a_s + np.arange(len(template)) / fs
+        bank = template[None, :] * np.exp(2j * np.pi * self.doppler_hz[:, None] * tau[None, :])
+        self._kernels = np.conj(bank[:, ::-1])
+        self.template_energy = float(np.sum(np.abs(template) ** 2))
+        self.length = len(template)
+        self.eta = z_threshold(false_alarms_per_hour, len(self.doppler_hz), fs)
+        self.min_rho = float(min_rho)
+        self.first_path_fraction = float(first_path_fraction)
+        self.window = max(1, int(round(multipath_window_s * fs)))
+        # frames do not overlap (BeaconSchedule.check): after a frame, skip most of its length
+        self.holdoff = int(0.95 * config.frame_duration_s * fs)
+        #: lags of context before the scan position for the noise median
+        self.context = int(fs)
+
+    def statistics(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """z, ρ, best bin and |c| for every full-overlap lag of ``r``.
+
+        Returns arrays of length len(r) − L + 1 (L the template length), lag j
+        meaning the template starts at r[j].
+        """
+        c = scipy.signal.oaconvolve(r[None, :], self._kernels, mode="valid", axes=1)
+        power = c.real**2 + c.imag**2
+        best = np.argmax(power, axis=0)
+        peak = np.take_along_axis(power, best[None, :], axis=0)[0]
+        noise = np.median(power) / math.log(2)
+        energy = np.cumsum(np.concatenate([[0.0], np.abs(r) ** 2]))
+        window = energy[self.length :] - energy[: -self.length]
+        rho = peak / (self.template_energy * np.maximum(window, np.finfo(float).tiny))
+        return peak / max(noise, np.finfo(float).tiny), rho, best, np.sqrt(peak)
+
+    def find(self, r: np.ndarray, r_start: int, scan_from: int, *, final: bool) -> tuple[list[Detection], int]:
+        """Detections whose lag is ≥ ``scan_from`` in the buffer ``r``.
+
+        Parameters
+        ----------
+        r : numpy.ndarray, complex
+            Baseband buffer; r[0] is global sample ``r_start``.
+        r_start, scan_from : int
+            Global sample indices.
+        final : bool
+            No more samples will come: decide clusters cut by the buffer's end.
+
+        Returns
+        -------
+        detections : list of Detection
+        scan_from : int
+            Where the next call should resume.
+        """
+        lo = max(r_start, scan_from - self.context)
+        seg = r[lo - r_start :]
+        if len(seg) < self.length:
+            return [], scan_from
+        z, rho, best, amp = self.statistics(seg)
+        n_lags = len(z)
+        hit = (z >= self.eta) & (rho >= self.min_rho)
+        out = []
+        pos = max(scan_from - lo, 0)
+        while True:
+            hits = np.flatnonzero(hit[pos:])
+            if hits.size == 0:
+                return out, lo + n_lags if n_lags > pos else scan_from
+            j0 = pos + int(hits[0])
+            end = j0 + self.window
+            if end >= n_lags and not final:
+                return out, lo + j0
+            end = min(end, n_lags - 1)
+            strongest = j0 + int(np.argmax(amp[j0 : end + 1]))
+            j = self._first_arrival(z, amp, hit, j0, strongest)
+            out.append(
+                Detection(
+                    t_start_s=(lo + j) / self.fs - self.tau_a_s,
+                    doppler_hz=float(self.doppler_hz[best[j]]),
+                    z=float(z[j]),
+                    rho=float(rho[j]),
+                )
+            )
+            pos = j + self.holdoff
+            if pos >= n_lags:
+                return out, lo + pos
+
+    def _first_arrival(self, z, amp, hit, j0: int, strongest: int) -> int:
+        """Earliest local maximum in [j0, strongest] strong enough to be the direct path."""
+        floor = self.first_path_fraction * amp[strongest]
+        for j in range(j0, strongest):
+            if hit[j] and j > 0 and amp[j] >= floor and amp[j] >= amp[j - 1] and amp[j] >= amp[j + 1]:
+                return j
+        return strongest

@@ -1,0 +1,313 @@
+"""Fine arrival time and Doppler of one frame from its basebands.
+
+Model (SPEC §1, constant v over the pilot): the frame received from t_a on is
+s((t − t_a)(1 + ε)), ε = v_r/c, so in the data baseband (carrier f0)
+
+    r(t) = A Σ_k x_k √T' g_{T'}(t − t_a − (Ng + k)T') e^{j2π f0 ε (t − t_a)},  T' = T/(1 + ε),
+
+and in the tone baseband (carrier f_pt) the tone is a w(·) e^{j2π f_pt ε t}.
+
+* :func:`fit_pilot` — paper 002's filter bank, refined: the detector's bank
+  of Doppler-shifted pilot replicas gives a coarse ε; here ε is refined by
+  dichotomy on the Doppler-scaled pilot correlation |Σ a_k* y_k(t_a, ε)|, and
+  t_a by parabolic interpolation of the same correlation evaluated at
+  arbitrary times (the pulse is evaluated analytically, so the estimate is
+  not tied to the sampling grid).
+* :func:`tone_track_eq9` — paper 000 eq 9 / paper 002: phase derivative of the
+  low-passed tone, v̂(kT_s) = c/(2π T_s f_pt)·arg(r(kT_s) r*((k−1)T_s)).
+* :func:`tone_frequency_ml` — maximum-likelihood frequency of the tone over the
+  whole frame (periodogram peak, refined by dichotomy): efficient above
+  threshold, i.e. it reaches the Rife–Boorstyn bound of SPEC §6.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from ..config import FrameConfig
+from ..transmit.frame import tone_envelope
+from ..transmit.pulse import srrc_matrix
+
+__all__ = [
+    "matched_filter",
+    "PilotFit",
+    "fit_pilot",
+    "ToneFit",
+    "tone_frequency_ml",
+    "tone_track_eq9",
+    "dichotomy_max",
+]
+
+
+def dichotomy_max(f, lo: float, hi: float, *, tol: float, max_iter: int = 200) -> float:
+    """Maximiser of a unimodal f on [lo, hi] by dichotomy (interval halving).
+
+    Each step compares f at the midpoint ± a quarter of ``tol`` and keeps the
+    half that holds the larger value.
+    """
+    eps = tol / 4
+    for _ in range(max_iter):
+        if hi - lo <= tol:
+            break
+        mid = 0.5 * (lo + hi)
+        if f(mid - eps) < f(mid + eps):
+            lo = mid - eps
+        else:
+            hi = mid + eps
+    return 0.5 * (lo + hi)
+
+
+def matched_filter(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    symbol_times_s: np.ndarray,
+    *,
+    config: FrameConfig,
+    scale: float = 1.0,
+    carrier_offset_hz: float = 0.0,
+    t_ref_s: float = 0.0,
+) -> np.ndarray:
+    """SRRC matched filter of a baseband at arbitrary symbol times.
+
+    y_k = (1/(fs T')) Σ_n r[n] e^{−j2π Δf (t_n − t_ref)} √T' g_{T'}(t_n − t_k), T' = T/scale.
+
+    Parameters
+    ----------
+    r : numpy.ndarray, complex
+        Baseband; r[n] at t_n = t0 + n/fs [s].
+    symbol_times_s : numpy.ndarray
+        Pulse centres t_k [s].
+    scale : float
+        Time compression 1 + ε of the received pulses.
+    carrier_offset_hz, t_ref_s : float
+        Frequency offset removed before filtering, phase zero at t_ref [Hz, s].
+
+    Returns
+    -------
+    numpy.ndarray, complex
+        With r = A Σ x_k √T' g_{T'}(t − t_k) e^{j2πΔf(t − t_ref)}, y_k = A x_k.
+    """
+    T = config.symbol_period_s / scale
+    half = (config.srrc_span_symbols // 2) * T
+    n_lo = max(0, int(math.floor((np.min(symbol_times_s) - half - t0_s) * fs)))
+    n_hi = min(len(r), int(math.ceil((np.max(symbol_times_s) + half - t0_s) * fs)) + 1)
+    if n_hi <= n_lo:
+        return np.zeros(len(symbol_times_s), complex)
+    ts = t0_s + np.arange(n_lo, n_hi) / fs
+    g = srrc_matrix(
+        ts, symbol_times_s, symbol_period_s=T, rolloff=config.rolloff, span_symbols=config.srrc_span_symbols
+    )
+    x = r[n_lo:n_hi]
+    if carrier_offset_hz:
+        x = x * np.exp(-2j * np.pi * carrier_offset_hz * (ts - t_ref_s))
+    return (g.T @ x) / (fs * T)
+
+
+@dataclass(frozen=True)
+class PilotFit:
+    """Arrival time, Doppler and SNR from the pilot.
+
+    Attributes
+    ----------
+    t_start_s : float
+        Reception time of the frame start [s].
+    v_mps : float
+        Closing speed over the pilot [m/s].
+    gain : complex
+        Complex amplitude A of the pilot symbols after the matched filter.
+    es_n0 : float
+        Measured Es/N0 (linear) from the pilot residual.
+    snr_db : float
+        In-band SNR, Es/N0 / (1 + α), [dB].
+    """
+
+    t_start_s: float
+    v_mps: float
+    gain: complex
+    es_n0: float
+    snr_db: float
+
+
+def fit_pilot(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    t_start_s: float,
+    doppler_hz: float,
+    search_hz: float,
+    sound_speed_mps: float,
+    iterations: int = 3,
+) -> PilotFit:
+    """Refine a coarse detection to the sub-sample arrival time and the pilot Doppler.
+
+    Parameters
+    ----------
+    r : numpy.ndarray, complex
+        Data-band baseband, r[n] at t0 + n/fs.
+    pilot : numpy.ndarray
+        Pilot symbols a_k.
+    t_start_s, doppler_hz : float
+        Coarse frame start [s] and carrier offset f0·v/c [Hz] (detector's bin).
+    search_hz : float
+        Half-width of the first Doppler dichotomy [Hz] (e.g. the bin spacing).
+
+    Notes
+    -----
+    Doppler bank and dichotomy: paper 002 §II.B (Trubuil & Chonavel). The
+    correlation is real and symmetric about its peak in t_a, so the parabola
+    through three points centred near the peak is unbiased once centred; two
+    passes (h = T/8, then T/32) make it so.
+    """
+    f0 = config.carrier_hz
+    T = config.symbol_period_s
+    tau = (config.n_guard + np.arange(config.n_pilot)) * T
+    a_conj = np.conj(np.asarray(pilot, dtype=complex))
+
+    def mf(t, eps):
+        return matched_filter(
+            r, fs, t0_s, t + tau / (1 + eps), config=config, scale=1 + eps, carrier_offset_hz=f0 * eps, t_ref_s=t
+        )
+
+    def corr(t, eps):
+        return abs(a_conj @ mf(t, eps))
+
+    t, eps = float(t_start_s), float(doppler_hz) / f0
+    width = float(search_hz) / f0
+    for _ in range(iterations):
+        weighted = a_conj * mf(t, eps)
+        phase_t = tau / (1 + eps)
+        delta = dichotomy_max(
+            lambda d: abs(weighted @ np.exp(-2j * np.pi * f0 * d * phase_t)), -width, width, tol=1e-10
+        )
+        eps += delta
+        width = max(abs(delta), width / 8)
+        for h in (T / 8, T / 32):
+            fm, fc, fp = corr(t - h, eps), corr(t, eps), corr(t + h, eps)
+            curvature = fm - 2 * fc + fp
+            if curvature < 0:
+                t += float(np.clip(h * (fm - fp) / (2 * curvature), -h, h))
+    y = mf(t, eps)
+    gain = (a_conj @ y) / len(y)
+    resid = y - gain * np.conj(a_conj)
+    noise = float(np.sum(np.abs(resid) ** 2) / max(len(y) - 1, 1))
+    es_n0 = abs(gain) ** 2 / max(noise, np.finfo(float).tiny)
+    snr_db = 10 * math.log10(max(es_n0 / (1 + config.rolloff), 1e-30))
+    return PilotFit(t_start_s=t, v_mps=eps * sound_speed_mps, gain=complex(gain), es_n0=es_n0, snr_db=snr_db)
+
+
+@dataclass(frozen=True)
+class ToneFit:
+    """Tone frequency (ML) and its C/N0.
+
+    Attributes
+    ----------
+    offset_hz : float
+        Tone frequency minus f_pt [Hz] (= f_pt·v/c).
+    amplitude : complex
+        Complex envelope amplitude.
+    c_n0_hz : float
+        Measured tone power over one-sided noise PSD [Hz].
+    """
+
+    offset_hz: float
+    amplitude: complex
+    c_n0_hz: float
+
+
+def tone_frequency_ml(
+    x: np.ndarray, t_s: np.ndarray, weights: np.ndarray, *, search_hz: float, noise_bandwidth_hz: float
+) -> ToneFit:
+    """Maximum-likelihood frequency of a tone of known envelope in white noise.
+
+    Maximises P(f) = |Σ w_n x_n e^{−j2π f t_n}|² over |f| ≤ search_hz: a grid
+    of 1/(8·span) then dichotomy to 1 µHz.
+
+    Parameters
+    ----------
+    x : numpy.ndarray, complex
+        Tone baseband samples.
+    t_s : numpy.ndarray
+        Their times [s].
+    weights : numpy.ndarray
+        Known envelope w_n (0 outside the tone).
+    search_hz : float
+        Half-width of the search [Hz].
+    noise_bandwidth_hz : float
+        ∫|H|² df of the front-end filter [Hz], to turn the residual variance
+        into a noise PSD.
+
+    Notes
+    -----
+    Rife & Boorstyn (1974): the periodogram maximiser is the ML estimator and
+    attains the CRLB above the SNR threshold.
+    """
+    tc = t_s - np.mean(t_s)
+    wx = weights * x
+    span = tc[-1] - tc[0]
+    grid = np.arange(-search_hz, search_hz, 1.0 / (8 * span))
+    power = np.abs(np.exp(-2j * np.pi * np.outer(grid, tc)) @ wx)
+    k = int(np.argmax(power))
+    step = grid[1] - grid[0]
+
+    def p(f):
+        return abs(wx @ np.exp(-2j * np.pi * f * tc))
+
+    f = dichotomy_max(p, grid[k] - step, grid[k] + step, tol=1e-6)
+    basis = weights * np.exp(2j * np.pi * f * tc)
+    amplitude = (np.conj(basis) @ x) / (np.conj(basis) @ basis)
+    inside = weights > 0.5
+    resid = x[inside] - amplitude * basis[inside]
+    variance = float(np.mean(np.abs(resid) ** 2))
+    c_n0 = abs(amplitude) ** 2 * noise_bandwidth_hz / max(variance, np.finfo(float).tiny)
+    return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0))
+
+
+def tone_track_eq9(
+    x: np.ndarray, fs: float, *, f_max_hz: float, tone_hz: float, sound_speed_mps: float
+) -> tuple[np.ndarray, int]:
+    """Radial speed track from the tone's phase derivative (paper 000 eq 9).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, complex
+        Tone baseband at rate fs.
+    f_max_hz : float
+        Low-pass cut-off v_max·f_pt/c [Hz].
+
+    Returns
+    -------
+    v : numpy.ndarray, shape (len(x) − 1,)
+        v̂ between consecutive samples [m/s]; v[k] belongs to t_k + 1/(2fs).
+    settle : int
+        Samples at either end spoiled by the low-pass (its half length).
+
+    Notes
+    -----
+    v̂(kT) = c / (2π T f_pt) · arg(r̃(kT) r̃*((k−1)T)), after a low-pass with
+    cut-off f_max = v_max f_pt / c (paper 000 eq 9, paper 002 §II.B).
+    """
+    half = max(1, int(math.ceil(2 * fs / f_max_hz)))
+    taps = scipy.signal.firwin(2 * half + 1, min(f_max_hz, 0.45 * fs), fs=fs)
+    xf = scipy.signal.oaconvolve(x, taps, mode="same")
+    v = sound_speed_mps * fs / (2 * np.pi * tone_hz) * np.angle(xf[1:] * np.conj(xf[:-1]))
+    return v, half
+
+
+def tone_segment(
+    tone: np.ndarray, fs: float, t0_s: float, *, config: FrameConfig, t_start_s: float, scale: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Tone baseband samples over the received frame, their times and envelope weights."""
+    duration = config.frame_duration_s / scale
+    n_lo = max(0, int(math.ceil((t_start_s - t0_s) * fs)))
+    n_hi = min(len(tone), int(math.floor((t_start_s + duration - t0_s) * fs)) + 1)
+    t = t0_s + np.arange(n_lo, n_hi) / fs
+    w = tone_envelope(config, (t - t_start_s) * scale)
+    return tone[n_lo:n_hi], t, w
