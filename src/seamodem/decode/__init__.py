@@ -1,7 +1,13 @@
-"""Payload decoding: soft demapping, deinterleaving, Viterbi, CRC (equalisation to come)."""
+"""Payload decoding: adaptive equalisation, soft demapping, deinterleaving, Viterbi, CRC."""
 
 from .demap import soft_demap
+from .equalizer import DfeResult, DfeSettings, dfe_equalize, mmse_dfe_taps
 from .payload import DecodedPayload, code_order_llr, decode_payload
 from .viterbi import viterbi_decode
 
-__all__ = ["soft_demap", "DecodedPayload", "code_order_llr", "decode_payload", "viterbi_decode"]
+__all__ = [
+    "DfeResult",
+    "DfeSettings",
+    "dfe_equalize",
+    "mmse_dfe_taps",
+    "soft_demap", "DecodedPayload", "code_order_llr", "decode_payload", "viterbi_decode"]
