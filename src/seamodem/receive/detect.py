@@ -37,7 +37,7 @@ from ..config import FrameConfig
 from ..transmit.pilot import pilot_symbols
 from ..transmit.pulse import srrc_matrix
 
-__all__ = ["Detection", "PilotDetector", "pilot_template", "z_threshold"]
+__all__ = ["Detection", "PilotDetector", "doppler_bin_spacing_hz", "pilot_template", "z_threshold"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,11 @@ def pilot_template(config: FrameConfig, fs: float, pilot: np.ndarray | None = No
     tau = tau_a + np.arange(n) / fs
     g = srrc_matrix(tau, tk, symbol_period_s=T, rolloff=config.rolloff, span_symbols=config.srrc_span_symbols)
     return g @ np.asarray(pilot, dtype=complex), float(tau_a)
+
+
+def doppler_bin_spacing_hz(config: FrameConfig) -> float:
+    """Spacing of the Doppler bins, 1/(2 T_p) [Hz]: worst-case loss sinc²(1/4) = −0.9 dB."""
+    return 1.0 / (2 * config.n_pilot * config.symbol_period_s)
 
 
 def z_threshold(false_alarms_per_hour: float, n_bins: int, fs: float) -> float:
@@ -128,9 +133,7 @@ class PilotDetector:
         self.config = config
         self.fs = float(fs)
         template, self.tau_a_s = pilot_template(config, fs, pilot)
-        pilot_s = config.n_pilot * config.symbol_period_s
-        # bins every 1/(2 T_p): worst-case loss sinc²(1/4) = −0.9 dB
-        spacing = 1.0 / (2 * pilot_s)
+        spacing = doppler_bin_spacing_hz(config)
         f_max = config.carrier_hz * v_max_mps / sound_speed_mps
         n_side = int(math.ceil(f_max / spacing))
         self.doppler_hz = spacing * np.arange(-n_side, n_side + 1)
@@ -143,6 +146,7 @@ class PilotDetector:
         self.min_rho = float(min_rho)
         self.first_path_fraction = float(first_path_fraction)
         self.window = max(1, int(round(multipath_window_s * fs)))
+        self.half_lobe = max(1, int(math.ceil(0.5 * config.symbol_period_s * fs)))
         # frames do not overlap (BeaconSchedule.check): after a frame, skip most of its length
         self.holdoff = int(0.95 * config.frame_duration_s * fs)
         #: lags of context before the scan position for the noise median
@@ -215,9 +219,15 @@ class PilotDetector:
                 return out, lo + pos
 
     def _first_arrival(self, z, amp, hit, j0: int, strongest: int) -> int:
-        """Earliest local maximum in [j0, strongest] strong enough to be the direct path."""
+        """Earliest distinct peak in [j0, strongest) strong enough to be the direct path.
+
+        A distinct peak is the maximum over ±half a symbol and lies at least one
+        symbol before the strongest: closer paths are not resolved (noise on
+        the main lobe's flank must not pass for an earlier path).
+        """
         floor = self.first_path_fraction * amp[strongest]
-        for j in range(j0, strongest):
-            if hit[j] and j > 0 and amp[j] >= floor and amp[j] >= amp[j - 1] and amp[j] >= amp[j + 1]:
+        w = self.half_lobe
+        for j in range(j0, strongest - 2 * w + 1):
+            if hit[j] and amp[j] >= floor and amp[j] >= np.max(amp[max(0, j - w) : j + w + 1]):
                 return j
         return strongest

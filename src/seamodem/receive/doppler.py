@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 import scipy.signal
 
 from ..config import FrameConfig
@@ -40,6 +41,7 @@ __all__ = [
     "tone_frequency_ml",
     "tone_track_eq9",
     "dichotomy_max",
+    "tone_segment",
 ]
 
 
@@ -144,7 +146,7 @@ def fit_pilot(
     doppler_hz: float,
     search_hz: float,
     sound_speed_mps: float,
-    iterations: int = 3,
+    iterations: int = 2,
 ) -> PilotFit:
     """Refine a coarse detection to the sub-sample arrival time and the pilot Doppler.
 
@@ -164,7 +166,7 @@ def fit_pilot(
     Doppler bank and dichotomy: paper 002 §II.B (Trubuil & Chonavel). The
     correlation is real and symmetric about its peak in t_a, so the parabola
     through three points centred near the peak is unbiased once centred; two
-    passes (h = T/8, then T/32) make it so.
+    passes (h = T/2, T/8, T/32, then T/32 after the Doppler update) make it so.
     """
     f0 = config.carrier_hz
     T = config.symbol_period_s
@@ -181,15 +183,16 @@ def fit_pilot(
 
     t, eps = float(t_start_s), float(doppler_hz) / f0
     width = float(search_hz) / f0
-    for _ in range(iterations):
+    for it in range(iterations):
         weighted = a_conj * mf(t, eps)
         phase_t = tau / (1 + eps)
         delta = dichotomy_max(
-            lambda d: abs(weighted @ np.exp(-2j * np.pi * f0 * d * phase_t)), -width, width, tol=1e-10
+            lambda d: abs(weighted @ np.exp(-2j * np.pi * f0 * d * phase_t)), -width, width, tol=1e-9
         )
         eps += delta
         width = max(abs(delta), width / 8)
-        for h in (T / 8, T / 32):
+        # the coarse start is within half a baseband sample: wide steps first
+        for h in (T / 2, T / 8, T / 32) if it == 0 else (T / 32,):
             fm, fc, fp = corr(t - h, eps), corr(t, eps), corr(t + h, eps)
             curvature = fm - 2 * fc + fp
             if curvature < 0:
@@ -228,7 +231,7 @@ def tone_frequency_ml(
     """Maximum-likelihood frequency of a tone of known envelope in white noise.
 
     Maximises P(f) = |Σ w_n x_n e^{−j2π f t_n}|² over |f| ≤ search_hz: a grid
-    of 1/(8·span) then dichotomy to 1 µHz.
+    of fs/(8·n) by FFT, then dichotomy to 1 µHz.
 
     Parameters
     ----------
@@ -251,11 +254,14 @@ def tone_frequency_ml(
     """
     tc = t_s - np.mean(t_s)
     wx = weights * x
-    span = tc[-1] - tc[0]
-    grid = np.arange(-search_hz, search_hz, 1.0 / (8 * span))
-    power = np.abs(np.exp(-2j * np.pi * np.outer(grid, tc)) @ wx)
+    fs = 1.0 / (t_s[1] - t_s[0])
+    # periodogram on a grid of 1/(8·span) by a zero-padded FFT (uniform samples)
+    n_fft = scipy.fft.next_fast_len(8 * len(x))
+    grid = np.fft.fftfreq(n_fft, 1.0 / fs)
+    power = np.abs(np.fft.fft(wx, n_fft))
+    power[np.abs(grid) > search_hz] = 0.0
     k = int(np.argmax(power))
-    step = grid[1] - grid[0]
+    step = fs / n_fft
 
     def p(f):
         return abs(wx @ np.exp(-2j * np.pi * f * tc))

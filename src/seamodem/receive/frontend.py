@@ -163,15 +163,13 @@ def plan_front_end(config: FrameConfig, fs: float, *, v_max_mps: float, sound_sp
     return FrontEndPlan(fs=fs, data=data, tone=tone, block_size=block, hop=block - 2 * margin, margin=margin)
 
 
-def _frequency_response(taps: np.ndarray, freqs_hz: np.ndarray, fs: float) -> np.ndarray:
-    """Real response H(f) = h_0 + 2 Σ_n h_n cos(2π f n / fs) of a zero-phase symmetric FIR."""
+def _frequency_response(taps: np.ndarray, n: int) -> np.ndarray:
+    """Real DFT response of a zero-phase symmetric FIR on an n-point grid (bin k ↔ k·fs/n)."""
     half = (len(taps) - 1) // 2
-    h = taps[half:]
-    n = np.arange(half + 1)
-    out = np.full(freqs_hz.shape, h[0])
-    for chunk in np.array_split(np.arange(1, half + 1), max(1, half // 256)):
-        out += 2 * np.cos(2 * np.pi * np.outer(freqs_hz, n[chunk]) / fs) @ h[chunk]
-    return out
+    circular = np.zeros(n)
+    circular[: half + 1] = taps[half:]
+    circular[n - half :] = taps[:half]
+    return scipy.fft.rfft(circular).real
 
 
 class _BranchExtractor:
@@ -185,7 +183,8 @@ class _BranchExtractor:
         offsets = np.arange(-(self.m // 2), self.m - self.m // 2)
         self.bins = self.k0 + offsets
         # pb2bb's factor 2 (complex envelope) and the inverse FFT's 1/M → N scaling
-        mask = _frequency_response(branch.taps, offsets * plan.fs / n, plan.fs) * 2.0 * self.m / n
+        response = _frequency_response(branch.taps, n)[np.abs(offsets)]  # real and even in f
+        mask = response * 2.0 * self.m / n
         self.mask = np.fft.ifftshift(mask)
         self.order = np.fft.ifftshift(np.arange(self.m))
         residual = branch.centre_hz - self.k0 * plan.fs / n
