@@ -2,10 +2,16 @@
 
 from .demap import soft_demap
 from .equalizer import DfeResult, DfeSettings, dfe_equalize, mmse_dfe_taps
+from .bcjr import bcjr_decode
 from .payload import DecodedPayload, code_order_llr, decode_payload
+from .turbo import TurboResult, estimate_channel, turbo_equalize
 from .viterbi import viterbi_decode
 
 __all__ = [
+    "bcjr_decode",
+    "TurboResult",
+    "estimate_channel",
+    "turbo_equalize",
     "DfeResult",
     "DfeSettings",
     "dfe_equalize",

@@ -34,6 +34,7 @@ __all__ = [
     "interleaver_permutation",
     "pn9_sequence",
     "encode_payload",
+    "encode_info",
     "info_block",
     "parse_info_block",
     "undo_scramble_interleave",
@@ -165,7 +166,11 @@ def parse_info_block(bits: np.ndarray, config: FrameConfig) -> tuple[bytes, bool
 
 def encode_payload(payload: bytes, config: FrameConfig) -> np.ndarray:
     """The ``config.n_coded_bits`` bits that the data symbols carry."""
-    info = info_block(payload, config)
+    return encode_info(info_block(payload, config), config)
+
+
+def encode_info(info: np.ndarray, config: FrameConfig) -> np.ndarray:
+    """Code, interleave and scramble an information block (``config.n_info_bits``) into on-air bits."""
     n = config.n_coded_bits
     if config.fec == "none":
         return info ^ pn9_sequence(n)

@@ -1,0 +1,185 @@
+"""Turbo equalisation: a soft-interference-cancelling MMSE equaliser exchanging extrinsic LLRs with the BCJR decoder.
+
+Pass 0 is the adaptive DFE (:func:`dfe_equalize`): its PLL phase track removes
+the residual carrier phase; its soft outputs are demapped and decoded. Each
+further pass (Tüchler, Koetter & Singer 2002, with the time-invariant
+"approximate" MMSE filter):
+
+1. a fractionally spaced channel h is estimated by least squares over the whole
+   frame from the pilots and the re-encoded decoder decisions, on samples
+   derotated by the DFE's phase track; the residual gives the noise variance σ²;
+2. the decoder's extrinsic LLRs on the coded bits (interleaved and scrambled
+   back to on-air order) give soft symbols s̄ and their mean variance v̄;
+3. for each symbol, ŝ_k = fᴴ(x_k − H s̄ + h₀ s̄_k), f = (v̄ H Hᴴ + (1 − v̄) h₀h₀ᴴ + σ² I)⁻¹ h₀,
+   so that ŝ_k = μ s_k + w, μ = fᴴh₀, var(w) = μ − μ²; its extrinsic LLRs go to
+   the decoder.
+
+BPSK and QPSK (Gray, one bit per real dimension) are supported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..config import FrameConfig
+from ..errors import ConfigError
+from ..transmit.coding import encode_info, interleaver_permutation, parse_info_block, pn9_sequence
+from ..transmit.modulation import bits_to_symbols
+from .bcjr import bcjr_decode
+from .demap import soft_demap
+from .equalizer import DfeSettings, dfe_equalize
+from .payload import DecodedPayload, code_order_llr
+
+__all__ = ["TurboResult", "turbo_equalize", "estimate_channel"]
+
+#: A-priori LLR given to the known zero fill bits after the code's tail.
+_FILL_LLR = 20.0
+
+
+@dataclass(frozen=True)
+class TurboResult:
+    """Outcome of turbo equalisation.
+
+    Attributes
+    ----------
+    decoded : DecodedPayload
+        Result of the last pass run.
+    crc_by_pass : tuple of bool
+        CRC outcome after each pass (pass 0 = DFE only); stops at the first success.
+    """
+
+    decoded: DecodedPayload
+    crc_by_pass: tuple[bool, ...]
+
+    @property
+    def passes(self) -> int:
+        return len(self.crc_by_pass)
+
+
+def _convolution_matrix(symbols: np.ndarray, n_samples: int, sps: int, n_taps: int, centre: int) -> np.ndarray:
+    """A[n, m] = s[k] where sps·k = n + centre − m: x = A h is the channel output."""
+    up = np.zeros(sps * symbols.size, complex)
+    up[::sps] = symbols
+    idx = np.arange(n_samples)[:, None] + centre - np.arange(n_taps)[None, :]
+    valid = (idx >= 0) & (idx < up.size)
+    return np.where(valid, up[np.clip(idx, 0, up.size - 1)], 0)
+
+
+def estimate_channel(x: np.ndarray, symbols: np.ndarray, sps: int, n_taps: int, centre: int) -> tuple[np.ndarray, float]:
+    """Least-squares fractionally spaced channel: x[sps·k − centre + m] ≈ Σ_k h[m] s[k].
+
+    Returns
+    -------
+    h : numpy.ndarray, shape (n_taps,)
+    noise_var : float
+        Mean squared residual per sample.
+    """
+    A = _convolution_matrix(symbols, x.size, sps, n_taps, centre)
+    h, *_ = np.linalg.lstsq(A, x, rcond=None)
+    return h, float(np.mean(np.abs(x - A @ h) ** 2))
+
+
+def _air_bits_llr(code_extrinsic: np.ndarray, config: FrameConfig) -> np.ndarray:
+    n = config.n_coded_bits
+    code = np.full(n, _FILL_LLR)
+    code[: code_extrinsic.size] = code_extrinsic
+    return code[interleaver_permutation(n)] * (1.0 - 2.0 * pn9_sequence(n))
+
+
+def _soft_symbols(llr_air: np.ndarray, modulation: str) -> np.ndarray:
+    t = np.tanh(np.clip(llr_air, -30, 30) / 2)
+    if modulation == "bpsk":
+        return t.astype(complex)
+    return (t[0::2] + 1j * t[1::2]) / np.sqrt(2)
+
+
+def _decode(llr_air: np.ndarray, config: FrameConfig):
+    info_llr, extrinsic = bcjr_decode(code_order_llr(llr_air, config), config.n_info_bits)
+    info = (info_llr < 0).astype(np.uint8)
+    payload, ok = parse_info_block(info, config)
+    return DecodedPayload(payload, ok, info), extrinsic
+
+
+def turbo_equalize(
+    x: np.ndarray,
+    pilots: np.ndarray,
+    config: FrameConfig,
+    *,
+    settings: DfeSettings = DfeSettings(),
+    passes: int = 4,
+    channel_taps: int | None = None,
+    window: int | None = None,
+) -> TurboResult:
+    """Equalise and decode one frame, iterating until the CRC passes or ``passes`` are spent.
+
+    Parameters
+    ----------
+    x : numpy.ndarray, complex
+        Doppler-compensated, matched-filtered samples, ``settings.sps`` per symbol,
+        x[sps·k] at symbol k (k = 0: first pilot), as for :func:`dfe_equalize`.
+    pilots : numpy.ndarray, complex, shape (n_pilot,)
+    config : FrameConfig
+        Frame whose ``n_data`` symbols follow the pilots (BPSK or QPSK).
+    settings : DfeSettings
+        Pass-0 equaliser; its ``n_ff`` and ``ff_centre`` also set the SIC window
+        and the channel estimate's span unless given.
+    passes : int
+        Maximum passes, ≥ 1 (1 = DFE only).
+    channel_taps, window : int, optional
+        Length of the estimated channel and of the SIC filter, in samples.
+    """
+    if config.modulation not in ("bpsk", "qpsk"):
+        raise ConfigError("modulation", f"turbo equalisation supports bpsk and qpsk, got {config.modulation!r}")
+    if passes < 1:
+        raise ConfigError("passes", f"must be >= 1, got {passes}")
+    sps = settings.sps
+    n_sym = config.n_pilot + config.n_data
+    x = np.asarray(x, dtype=complex)[: sps * n_sym + settings.n_ff]
+    dfe = dfe_equalize(x, pilots, n_sym, config.modulation, settings)
+    llr_air = soft_demap(dfe.soft[config.n_pilot :], dfe.noise_var, config.modulation)
+    decoded, extrinsic = _decode(llr_air, config)
+    history = [decoded.crc_ok]
+    if decoded.crc_ok or passes == 1:
+        return TurboResult(decoded, tuple(history))
+
+    centre = settings.ff_centre
+    n_taps = channel_taps or settings.n_ff
+    n_win = window or settings.n_ff
+    phase = np.repeat(dfe.phase, sps)
+    phase = np.pad(phase, (0, max(0, x.size - phase.size)), mode="edge")[: x.size]
+    derot = x * np.exp(-1j * phase)
+    # symbol offsets j with a nonzero contribution h[i − centre_w + centre − sps·j] to window sample i
+    centre_w = settings.ff_centre
+    j_lo = int(np.floor((0 - centre_w + centre - (n_taps - 1)) / sps))
+    j_hi = int(np.ceil((n_win - 1 - centre_w + centre) / sps))
+    offsets = np.arange(j_lo, j_hi + 1)
+    win_idx = sps * np.arange(n_sym)[:, None] - centre_w + np.arange(n_win)[None, :]
+    win_ok = (win_idx >= 0) & (win_idx < derot.size)
+    X = np.where(win_ok, derot[np.clip(win_idx, 0, derot.size - 1)], 0)
+    for _ in range(passes - 1):
+        reference = np.concatenate([pilots, bits_to_symbols(encode_info(decoded.info_bits, config), config.modulation)])
+        h, noise_var = estimate_channel(derot, reference, sps, n_taps, centre)
+        Hw = np.zeros((n_win, offsets.size), complex)
+        for col, j in enumerate(offsets):
+            m = np.arange(n_win) - centre_w + centre - sps * j
+            ok = (m >= 0) & (m < n_taps)
+            Hw[ok, col] = h[m[ok]]
+        h0 = Hw[:, np.flatnonzero(offsets == 0)[0]]
+        means = np.concatenate([pilots, _soft_symbols(_air_bits_llr(extrinsic, config), config.modulation)])
+        v_bar = float(np.mean(1 - np.abs(means[config.n_pilot :]) ** 2))
+        cov = v_bar * Hw @ Hw.conj().T + (1 - v_bar) * np.outer(h0, h0.conj()) + max(noise_var, 1e-9) * np.eye(n_win)
+        f = np.linalg.solve(cov, h0)
+        mu = float(np.real(np.vdot(f, h0)))
+        k_idx = np.arange(n_sym)[:, None] + offsets[None, :]
+        k_ok = (k_idx >= 0) & (k_idx < n_sym)
+        S = np.where(k_ok, means[np.clip(k_idx, 0, n_sym - 1)], 0)
+        est = (X - S @ Hw.T + np.outer(means, h0)) @ f.conj()
+        var_w = max(mu - mu * mu, 1e-9)
+        llr_air = soft_demap(est[config.n_pilot :] / mu, var_w / mu**2, config.modulation)
+        decoded, extrinsic = _decode(llr_air, config)
+        history.append(decoded.crc_ok)
+        if decoded.crc_ok:
+            break
+    return TurboResult(decoded, tuple(history))
