@@ -13,8 +13,11 @@ f0·v/c would otherwise turn the pilot's phase by several cycles at a few m/s).
   false alarms per hour. The median ignores the sparse pilot peaks and
   impulses.
 * ρ = |c|² / (E_p · Σ_window |r|²) ∈ [0, 1] (Cauchy–Schwarz), the normalised
-  correlation: it is near 1/Np for an impulse, however loud, and ≈ S/(S+N)
-  for a frame. Requiring ρ ≥ ρ_min rejects impulsive noise that passes z.
+  correlation: it is near 1/Np for an impulse, however loud, ≈ S/(S+N) for a
+  frame, and stays below ≈ 0.06 on random data symbols (the maximum over
+  thousands of lags and all bins of a Beta(1, ~200) variable). Requiring
+  ρ ≥ ρ_min = 0.1 rejects impulsive noise and a frame's own data, which pass
+  z easily; it also limits detection to in-band SNR ≳ −7 dB.
 
 First arrival
 -------------
@@ -125,7 +128,7 @@ class PilotDetector:
         v_max_mps: float,
         sound_speed_mps: float,
         false_alarms_per_hour: float = 0.01,
-        min_rho: float = 0.05,
+        min_rho: float = 0.1,
         first_path_fraction: float = 0.3,
         multipath_window_s: float = 0.03,
         pilot: np.ndarray | None = None,
@@ -147,8 +150,9 @@ class PilotDetector:
         self.first_path_fraction = float(first_path_fraction)
         self.window = max(1, int(round(multipath_window_s * fs)))
         self.half_lobe = max(1, int(math.ceil(0.5 * config.symbol_period_s * fs)))
-        # frames do not overlap (BeaconSchedule.check): after a frame, skip most of its length
-        self.holdoff = int(0.95 * config.frame_duration_s * fs)
+        # frames do not overlap (BeaconSchedule.check): after a frame, skip its length,
+        # less what the largest Doppler compression (twice, for margin) could take off
+        self.holdoff = int(config.frame_duration_s * (1 - 2 * v_max_mps / sound_speed_mps) * fs)
         #: lags of context before the scan position for the noise median
         self.context = int(fs)
 
@@ -162,7 +166,8 @@ class PilotDetector:
         power = c.real**2 + c.imag**2
         best = np.argmax(power, axis=0)
         peak = np.take_along_axis(power, best[None, :], axis=0)[0]
-        noise = np.median(power) / math.log(2)
+        # the floor (60 dB under the block's peak) keeps z finite in a noiseless recording
+        noise = max(np.median(power) / math.log(2), 1e-6 * float(np.max(peak)))
         energy = np.cumsum(np.concatenate([[0.0], np.abs(r) ** 2]))
         window = energy[self.length :] - energy[: -self.length]
         rho = peak / (self.template_energy * np.maximum(window, np.finfo(float).tiny))
@@ -204,7 +209,7 @@ class PilotDetector:
             if end >= n_lags and not final:
                 return out, lo + j0
             end = min(end, n_lags - 1)
-            strongest = j0 + int(np.argmax(amp[j0 : end + 1]))
+            strongest = j0 + int(np.argmax(np.where(hit[j0 : end + 1], amp[j0 : end + 1], 0.0)))
             j = self._first_arrival(z, amp, hit, j0, strongest)
             out.append(
                 Detection(

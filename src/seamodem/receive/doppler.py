@@ -35,6 +35,7 @@ from ..transmit.pulse import srrc_matrix
 
 __all__ = [
     "matched_filter",
+    "pilot_correlation",
     "PilotFit",
     "fit_pilot",
     "ToneFit",
@@ -110,6 +111,40 @@ def matched_filter(
     return (g.T @ x) / (fs * T)
 
 
+def _pilot_outputs(r, fs, t0_s, config: FrameConfig, t_start_s: float, eps: float) -> np.ndarray:
+    """Matched-filter outputs at the pilot symbols of a frame starting at t_start with Doppler ε."""
+    tau = (config.n_guard + np.arange(config.n_pilot)) * config.symbol_period_s
+    return matched_filter(
+        r,
+        fs,
+        t0_s,
+        t_start_s + tau / (1 + eps),
+        config=config,
+        scale=1 + eps,
+        carrier_offset_hz=config.carrier_hz * eps,
+        t_ref_s=t_start_s,
+    )
+
+
+def pilot_correlation(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    t_start_s: np.ndarray,
+    v_mps: float,
+    sound_speed_mps: float,
+) -> np.ndarray:
+    """|Σ a_k* y_k| / Np, the Doppler-scaled pilot correlation, at candidate frame starts [s]."""
+    eps = v_mps / sound_speed_mps
+    a_conj = np.conj(np.asarray(pilot, dtype=complex))
+    return np.array([abs(a_conj @ _pilot_outputs(r, fs, t0_s, config, t, eps)) for t in np.atleast_1d(t_start_s)]) / len(
+        a_conj
+    )
+
+
 @dataclass(frozen=True)
 class PilotFit:
     """Arrival time, Doppler and SNR from the pilot.
@@ -174,9 +209,7 @@ def fit_pilot(
     a_conj = np.conj(np.asarray(pilot, dtype=complex))
 
     def mf(t, eps):
-        return matched_filter(
-            r, fs, t0_s, t + tau / (1 + eps), config=config, scale=1 + eps, carrier_offset_hz=f0 * eps, t_ref_s=t
-        )
+        return _pilot_outputs(r, fs, t0_s, config, t, eps)
 
     def corr(t, eps):
         return abs(a_conj @ mf(t, eps))

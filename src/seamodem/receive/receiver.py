@@ -31,6 +31,7 @@ from .detect import Detection, PilotDetector, doppler_bin_spacing_hz
 from .doppler import PilotFit, ToneFit, fit_pilot, tone_frequency_ml, tone_segment, tone_track_eq9
 from .frontend import FrontEnd, FrontEndPlan, plan_front_end
 from .records import MeasurementRecord
+from .two_way import two_way_range_m
 
 __all__ = [
     "Emissions",
@@ -199,8 +200,9 @@ class Receiver:
     pilot : numpy.ndarray, optional
         Pilot symbols (default: from the config's seed).
     on_frame : callable, optional
-        Called with (FrameMeasurement, bb, bb_t0_s) for every frame, e.g. to
-        plot or to compensate it.
+        Called with (FrameMeasurement, bb, bb_t0_s, fs_bb) for every frame:
+        the data baseband around it, its first sample's time [s] and its
+        rate [Hz], e.g. to plot the frame or to compensate it.
 
     Examples
     --------
@@ -251,7 +253,7 @@ class Receiver:
             tof = t_arr - t_emit - self.clock_offset_s
         else:
             k, t_emit = self.emissions.frame_for(t_arr - self.turnaround_s)
-            tof = (t_arr - t_emit - self.turnaround_s) / 2
+            tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=self.turnaround_s, sound_speed_mps=1.0))
         sigma_tau = float(delay_crlb_s(self.config, m.pilot.snr_db))
         if self.turnaround_s is not None:
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
@@ -320,7 +322,7 @@ class Receiver:
                             stacklevel=3,
                         )
                     if self.on_frame is not None:
-                        self.on_frame(m, state.bb, state.bb_start / plan.fs_data)
+                        self.on_frame(m, state.bb, state.bb_start / plan.fs_data, plan.fs_data)
                     yield self._record(m)
                 else:
                     keep.append(d)

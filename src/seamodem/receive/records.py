@@ -113,7 +113,9 @@ def _json_value(value):
     return value
 
 
-def write_measurements(path: str | Path, records: Iterable[MeasurementRecord], header: dict[str, Any]) -> int:
+def write_measurements(
+    path: str | Path, records: Iterable[MeasurementRecord], header: dict[str, Any], *, kind: str | None = None
+) -> int:
     """Write records to ``path`` (.csv or .jsonl) as they come; returns how many.
 
     Parameters
@@ -121,6 +123,8 @@ def write_measurements(path: str | Path, records: Iterable[MeasurementRecord], h
     header : dict
         Run description (sound speed, clock offset, configuration...), written
         first with ``format`` added.
+    kind : {"csv", "jsonl"}, optional
+        File format; default from the suffix of ``path``.
 
     Notes
     -----
@@ -128,7 +132,7 @@ def write_measurements(path: str | Path, records: Iterable[MeasurementRecord], h
     failed run leaves no partial file.
     """
     path = Path(path)
-    kind = _format(path)
+    kind = kind or _format(path)
     head = {"format": MEASUREMENT_FORMAT, **header}
     n = 0
     with path.open("w", encoding="utf-8", newline="") as f:

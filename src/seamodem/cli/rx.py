@@ -1,0 +1,183 @@
+"""``seamodem rx``: measure every frame of a recording (range, radial speed, SNR)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputFileError, SeamodemError
+from ..io.files import atomic_outputs, check_writable
+from ..io.sidecar import read_sidecar, sidecar_path
+from ..io.wav import wav_info
+from ..receive.receiver import Emissions, ReceiverWarning, receive_file
+from ..receive.records import write_measurements
+from ._common import add_config_options, command_line, config_from_args
+
+DEFAULT_SOUND_SPEED_MPS = 1500.0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "rx",
+        help="measure range and radial speed of every frame in a recording",
+        description=(
+            "Detect every frame in RECORDING and write one measurement record per frame "
+            "(frame_index, t_emit_s, t_arrival_s, tof_s, range_m, v_r_mps, snr_db, ...) to a .csv or "
+            ".jsonl file. Emission times come from the sidecar (--config SIDECAR.json, or the "
+            "recording's own .json), or from --emit-start/--emit-period."
+        ),
+    )
+    p.add_argument("recording", metavar="RECORDING", help="audio file (WAV...), any sample rate holding the band")
+    add_config_options(p)
+    p.add_argument("-o", "--output", required=True, metavar="MEAS", help="output .csv or .jsonl")
+    p.add_argument("--emit-start", type=float, metavar="T0", help="emission time of frame 0 [s] (PPS beacon)")
+    p.add_argument("--emit-period", type=float, metavar="TCOM", help="time between emissions [s]")
+    p.add_argument("--sound-speed", type=float, metavar="M/S", help="c (default: the sidecar's, else 1500 m/s)")
+    p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
+    p.add_argument(
+        "--turnaround",
+        type=float,
+        metavar="S",
+        help="two-way ranging: the beacon's reply delay [s]; emission times are then the vehicle's polls",
+    )
+    p.add_argument("--channel", type=int, help="channel of a multichannel recording (0-based)")
+    p.add_argument("--v-max", type=float, default=5.0, metavar="M/S", help="largest |v_r| searched (default 5 m/s)")
+    p.add_argument(
+        "--false-alarms-per-hour",
+        type=float,
+        default=0.01,
+        metavar="RATE",
+        help="detector design false-alarm rate in white noise (default 0.01 per hour)",
+    )
+    p.add_argument("--plot", metavar="DIR", help="write figures of the first --plot-frames frames to DIR")
+    p.add_argument("--plot-frames", type=int, default=3, metavar="N", help="frames to plot (default 3)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    p.set_defaults(run=run)
+
+
+def _sidecar_for(args) -> dict | None:
+    """The sidecar named by --config (if it is one), else the recording's own, else None."""
+    if args.config:
+        path = Path(args.config)
+        if path.suffix.lower() == ".json" and path.is_file():
+            try:
+                data = json.loads(path.read_text(encoding="utf-8"))
+            except json.JSONDecodeError:
+                return None  # load_config reports it with the file name
+            if isinstance(data, dict) and "format" in data:
+                return read_sidecar(path)
+        return None
+    own = sidecar_path(args.recording)
+    return read_sidecar(own) if own.is_file() and own != Path(args.recording) else None
+
+
+def _emissions(args, sidecar, duration_s: float) -> Emissions:
+    if args.emit_start is not None or args.emit_period is not None:
+        if args.emit_start is None or args.emit_period is None:
+            raise SeamodemError("emit-start: --emit-start and --emit-period go together")
+        return Emissions(start_s=args.emit_start, period_s=args.emit_period)
+    if sidecar is None:
+        raise SeamodemError(
+            "emission times unknown: give --config SIDECAR.json, put the sidecar beside the recording, "
+            "or use --emit-start and --emit-period"
+        )
+    try:
+        times = np.array([float(f["t_emit_s"]) for f in sidecar["frames"]])
+    except (KeyError, TypeError, ValueError):
+        raise InputFileError("sidecar: its 'frames' list lacks valid t_emit_s values") from None
+    if times.size == 0:
+        raise InputFileError("sidecar: lists no frames")
+    if times[0] - args.clock_offset >= duration_s:
+        raise InputFileError(
+            f"sidecar does not match {args.recording}: its first emission is at {times[0]:g} s, "
+            f"after the recording's end at {duration_s:g} s"
+        )
+    return Emissions(times_s=times)
+
+
+def run(args: argparse.Namespace) -> int:
+    out = check_writable(args.output)
+    if out.suffix.lower() not in (".csv", ".jsonl"):
+        raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+    info = wav_info(args.recording)
+    if info.frames == 0:
+        raise InputFileError(f"recording {args.recording} holds no samples")
+    sidecar = _sidecar_for(args)
+    if sidecar is not None and not args.config:
+        args.config = str(sidecar_path(args.recording))
+    config = config_from_args(args)
+    emissions = _emissions(args, sidecar, info.frames / info.samplerate)
+    pilot = None
+    if sidecar is not None and "bits" in sidecar.get("pilot", {}):
+        bits = np.array([int(ch) for ch in sidecar["pilot"]["bits"]])
+        if bits.size == config.n_pilot:
+            pilot = (1.0 - 2.0 * bits).astype(complex)
+    sound_speed = args.sound_speed
+    if sound_speed is None:
+        sound_speed = float((sidecar or {}).get("channel", {}).get("sound_speed_mps", DEFAULT_SOUND_SPEED_MPS))
+    if not (math.isfinite(sound_speed) and sound_speed > 0):
+        raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
+    if args.plot:
+        plot_dir = Path(args.plot)
+        if not plot_dir.is_dir():
+            raise SeamodemError(f"plot: folder {plot_dir} does not exist")
+    on_frame = _plotter(args, config, pilot, sound_speed) if args.plot else None
+    header = {
+        "created_by": command_line(),
+        "recording": str(args.recording),
+        "sample_rate_hz": info.samplerate,
+        "sound_speed_mps": sound_speed,
+        "clock_offset_s": args.clock_offset,
+        "turnaround_s": args.turnaround,
+        "config": config.to_dict(),
+    }
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ReceiverWarning)
+        records = receive_file(
+            args.recording,
+            config,
+            emissions=emissions,
+            channel=args.channel,
+            progress=False if args.quiet else None,
+            sound_speed_mps=sound_speed,
+            clock_offset_s=args.clock_offset,
+            turnaround_s=args.turnaround,
+            v_max_mps=args.v_max,
+            false_alarms_per_hour=args.false_alarms_per_hour,
+            pilot=pilot,
+            on_frame=on_frame,
+        )
+        with atomic_outputs(out) as (tmp,):
+            n = write_measurements(tmp, records, header, kind=out.suffix.lower().lstrip("."))
+    for w in caught:
+        if issubclass(w.category, ReceiverWarning):
+            print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
+    if not args.quiet:
+        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {sound_speed:g} m/s)")
+    return 0
+
+
+def _plotter(args, config, pilot, sound_speed):
+    """on_frame callback that saves a figure of each of the first --plot-frames frames."""
+    from ..receive.plots import plot_frame
+    from ..transmit.pilot import pilot_symbols
+
+    symbols = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else pilot
+    count = [0]
+
+    def on_frame(m, bb, t0_s, fs):
+        if count[0] >= args.plot_frames:
+            return
+        count[0] += 1
+        path = Path(args.plot) / f"frame_{count[0] - 1:04d}_{m.pilot.t_start_s:.3f}s.png"
+        plot_frame(
+            path, m, bb, fs=fs, t0_s=t0_s, config=config, pilot=symbols, sound_speed_mps=sound_speed
+        )
+
+    return on_frame
