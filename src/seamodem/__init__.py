@@ -12,6 +12,17 @@ from .dsp import bb2pb, pb2bb
 from .errors import ConfigError, InputFileError, PayloadError, SeamodemError
 from .transmit import *  # noqa: F403
 from .transmit import __all__ as _transmit_all
+from .receive import (
+    Emissions,
+    MeasurementRecord,
+    Receiver,
+    compensate_frame,
+    measure_frame,
+    read_measurements,
+    receive_file,
+    two_way_range_m,
+    write_measurements,
+)
 
 __all__ = [
     "__version__",
@@ -27,4 +38,13 @@ __all__ = [
     "PayloadError",
     "SeamodemError",
     *_transmit_all,
+    "Emissions",
+    "MeasurementRecord",
+    "Receiver",
+    "compensate_frame",
+    "measure_frame",
+    "read_measurements",
+    "receive_file",
+    "two_way_range_m",
+    "write_measurements",
 ]
