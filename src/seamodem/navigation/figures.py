@@ -69,8 +69,9 @@ def plot_track(t_s, estimate_xy, path: str | Path, *, beacon_xy, sigma_xy=None, 
 
 
 def _save(fig, path) -> None:
+    """Write ``fig`` as PNG atomically (``path`` may itself be a temporary name without the suffix)."""
     plt = _pyplot()
     fig.tight_layout()
     with atomic_outputs(path) as (tmp,):
-        fig.savefig(tmp, dpi=120, format=Path(path).suffix.lstrip(".") or "png")
+        fig.savefig(tmp, dpi=120, format="png")
     plt.close(fig)
