@@ -40,6 +40,8 @@ def add_parser(sub) -> None:
     s.add_argument("--sigma-vr", type=float, metavar="MPS", help="emulated v_r noise [m/s] (default √0.2 = 0.447)")
     s.add_argument("--matched-r", action="store_true",
                    help="set the filter's R for range and v_r to the emulated variances (default: eq 25's 12 and 0.2)")
+    s.add_argument("--q", type=float, metavar="VAR",
+                   help="filter process noise variance per state and step (default Δt⁸ = 1.5e-5, eq 25)")
     s.add_argument("--workers", type=int, help="threads (default: all cores)")
     s.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -87,7 +89,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         noise = replace(noise, sigma_range_m=args.sigma_range)
     if args.sigma_vr is not None:
         noise = replace(noise, sigma_vr_mps=args.sigma_vr)
-    config = MissionConfig(noise=noise, steer_on_estimate=args.steer == "estimate")
+    config = MissionConfig(noise=noise, steer_on_estimate=args.steer == "estimate", q=args.q)
     if args.matched_r:
         config = replace(config, r_diag=(noise.sigma_range_m**2, noise.sigma_vr_mps**2, *config.r_diag[2:]))
     for t in args.tcom:
