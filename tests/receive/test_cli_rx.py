@@ -1,0 +1,170 @@
+"""``seamodem rx`` end to end, and every bad input of issue 4: one line, exit 2, no output file."""
+
+import json
+
+import numpy as np
+import pytest
+import soundfile
+
+from seamodem import BeaconSchedule, get_preset, write_beacon
+from seamodem.cli import main
+from seamodem.receive import MeasurementRecord, read_measurements, write_measurements
+
+CFG = get_preset("jmse2024")
+FS = int(CFG.sample_rate_hz)
+SHIFT = 19231  # samples of delay, ≈ 300 m
+DELAY_S = SHIFT / FS
+
+
+@pytest.fixture(scope="module")
+def beacon(tmp_path_factory):
+    """Three frames written by the transmitter, and a copy delayed by DELAY_S with noise."""
+    d = tmp_path_factory.mktemp("rx")
+    wav = d / "beacon.wav"
+    sidecar = write_beacon(wav, CFG, BeaconSchedule(count=3, period_s=1.0, start_s=0.1), progress=False)
+    x, fs = soundfile.read(wav)
+    y = np.concatenate([np.zeros(SHIFT), x]) + 0.003 * np.random.default_rng(0).standard_normal(len(x) + SHIFT)
+    delayed = d / "delayed.wav"
+    soundfile.write(delayed, y, fs, subtype="FLOAT")
+    side = dict(sidecar, recording=dict(sidecar["recording"], file="delayed.wav", n_samples=len(y)))
+    (d / "delayed.json").write_text(json.dumps(side))
+    return d, wav, delayed, sidecar
+
+
+def _fail(capsys, argv, expected):
+    code = main(argv)
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and err.startswith("seamodem rx: error:")
+    assert expected in err
+    return err
+
+
+def test_happy_path_csv_with_the_recordings_own_sidecar(beacon, tmp_path, capsys):
+    _, _, delayed, _ = beacon
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(delayed), "-o", str(out), "-q"]) == 0
+    recs, header = read_measurements(out)
+    assert header["sound_speed_mps"] == 1500.0 and header["config"]["name"] == "jmse2024"
+    assert [r.frame_index for r in recs] == [0, 1, 2]
+    # integer-sample delay, in-band SNR ≈ 40 dB: CRLB 0.2 mm, plus the pilot's 0.4 mm self-noise
+    assert np.allclose([r.range_m for r in recs], 1500.0 * DELAY_S, atol=1e-3)
+    assert np.allclose([r.v_r_mps for r in recs], 0.0, atol=1e-3)
+
+
+def test_emit_schedule_jsonl_sound_speed_and_clock_offset(beacon, tmp_path):
+    _, _, delayed, _ = beacon
+    out = tmp_path / "m.jsonl"
+    argv = ["rx", str(delayed), "--config", str(beacon[0] / "delayed.json"), "--emit-start", "0.1",
+            "--emit-period", "1.0", "--sound-speed", "1480", "--clock-offset", "0.05", "-o", str(out), "-q"]
+    assert main(argv) == 0
+    recs, header = read_measurements(out)
+    assert header["sound_speed_mps"] == 1480.0
+    assert np.allclose([r.tof_s for r in recs], DELAY_S - 0.05, atol=1e-6)  # 1.5 mm at c
+    assert np.allclose([r.range_m for r in recs], 1480.0 * (DELAY_S - 0.05), atol=1e-3)
+
+
+def test_plots_are_written(beacon, tmp_path):
+    _, _, delayed, _ = beacon
+    assert main(["rx", str(delayed), "-o", str(tmp_path / "m.csv"), "--plot", str(tmp_path), "--plot-frames", "1",
+                 "-q"]) == 0
+    assert len(list(tmp_path.glob("frame_*.png"))) == 1
+
+
+def test_other_sample_rate_is_resampled(beacon, tmp_path):
+    """The same recording at 192 kHz (FFT-resampled, exact for this band) is measured alike."""
+    d, _, delayed, _ = beacon
+    from scipy.signal import resample_poly
+
+    x, fs = soundfile.read(delayed)
+    up = d / "up.wav"
+    soundfile.write(up, resample_poly(x, 2, 1), 2 * fs, subtype="FLOAT")
+    (d / "up.json").write_text((d / "delayed.json").read_text())
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(up), "-o", str(out), "-q"]) == 0
+    recs, _ = read_measurements(out)
+    assert np.allclose([r.range_m for r in recs], 1500.0 * DELAY_S, atol=2e-3)
+
+
+def test_missing_empty_non_audio_files(tmp_path, capsys, beacon):
+    out = tmp_path / "m.csv"
+    side = str(beacon[0] / "delayed.json")
+    _fail(capsys, ["rx", str(tmp_path / "none.wav"), "--config", side, "-o", str(out)], "not found")
+    empty = tmp_path / "empty.wav"
+    empty.write_bytes(b"")
+    _fail(capsys, ["rx", str(empty), "--config", side, "-o", str(out)], "empty")
+    text = tmp_path / "notes.wav"
+    text.write_text("not audio at all\n" * 10)
+    _fail(capsys, ["rx", str(text), "--config", side, "-o", str(out)], "not a readable audio file")
+    assert not out.exists()
+
+
+def test_truncated_and_nan_files(tmp_path, capsys, beacon):
+    _, _, delayed, _ = beacon
+    out = tmp_path / "m.csv"
+    side = str(beacon[0] / "delayed.json")
+    data = delayed.read_bytes()
+    cut = tmp_path / "cut.wav"
+    cut.write_bytes(data[: len(data) // 2])
+    _fail(capsys, ["rx", str(cut), "--config", side, "-o", str(out)], "truncated")
+    x, fs = soundfile.read(delayed)
+    x[len(x) // 2] = np.nan
+    nan = tmp_path / "nan.wav"
+    soundfile.write(nan, x, fs, subtype="FLOAT")
+    _fail(capsys, ["rx", str(nan), "--config", side, "-o", str(out)], "NaN")
+    assert not out.exists()
+
+
+def test_sidecar_that_does_not_match(tmp_path, capsys, beacon):
+    _, _, delayed, sidecar = beacon
+    late = dict(sidecar, frames=[dict(f, t_emit_s=f["t_emit_s"] + 100.0) for f in sidecar["frames"]])
+    bad = tmp_path / "late.json"
+    bad.write_text(json.dumps(late))
+    out = tmp_path / "m.csv"
+    _fail(capsys, ["rx", str(delayed), "--config", str(bad), "-o", str(out)], "does not match")
+    assert not out.exists()
+
+
+def test_no_emission_times_and_multichannel(tmp_path, capsys, beacon):
+    x, fs = soundfile.read(beacon[2])
+    lone = tmp_path / "lone.wav"
+    soundfile.write(lone, x, fs)
+    out = tmp_path / "m.csv"
+    _fail(capsys, ["rx", str(lone), "-o", str(out)], "emission times unknown")
+    stereo = tmp_path / "stereo.wav"
+    soundfile.write(stereo, np.stack([x, x], axis=1), fs, subtype="FLOAT")
+    _fail(capsys, ["rx", str(stereo), "--emit-start", "0.1", "--emit-period", "1", "-o", str(out)], "--channel")
+    assert main(["rx", str(stereo), "--emit-start", "0.1", "--emit-period", "1", "--channel", "1", "-o", str(out),
+                 "-q"]) == 0
+    assert len(read_measurements(out)[0]) == 3
+
+
+@pytest.mark.parametrize("kind", ["zeros", "noise", "clipped"])
+def test_degraded_recordings_warn(tmp_path, capsys, kind):
+    n = 3 * FS
+    rng = np.random.default_rng(1)
+    x = {"zeros": np.zeros(n), "noise": 0.1 * rng.standard_normal(n), "clipped": np.clip(rng.standard_normal(n), -1, 1)}[
+        kind
+    ]
+    wav = tmp_path / "x.wav"
+    soundfile.write(wav, x, FS, subtype="PCM_16")
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(wav), "--emit-start", "0", "--emit-period", "1", "-o", str(out), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "no frame found" in err
+    assert {"zeros": "silent", "noise": "no frame", "clipped": "clipped"}[kind] in err
+    recs, header = read_measurements(out)
+    assert recs == [] and header["format"] == "seamodem.measurements/1"  # honest empty result
+
+
+def test_records_round_trip(tmp_path):
+    rec = MeasurementRecord(
+        frame_index=3, t_emit_s=9.0, t_arrival_s=9.2, tof_s=0.2, range_m=300.0, v_r_mps=-1.25, snr_db=11.0,
+        v_r_tone_eq9_mps=-1.2, v_r_bank_mps=-1.3, detection_z=500.0, detection_rho=0.6, sigma_range_m=0.002,
+        sigma_v_r_mps=6e-4, sigma_v_r_bank_mps=0.02, tone_c_n0_dbhz=50.0, two_way=True, payload_valid=None,
+    )
+    for suffix in ("csv", "jsonl"):
+        path = tmp_path / f"m.{suffix}"
+        write_measurements(path, [rec], {"sound_speed_mps": 1500.0})
+        back, header = read_measurements(path)
+        assert back == [rec] and header["sound_speed_mps"] == 1500.0
