@@ -2,6 +2,7 @@
 
 from .demap import soft_demap
 from .equalizer import DfeResult, DfeSettings, dfe_equalize, mmse_dfe_taps
+from .frame import decode_frame, fractional_samples
 from .bcjr import bcjr_decode
 from .payload import DecodedPayload, code_order_llr, decode_payload
 from .turbo import TurboResult, estimate_channel, turbo_equalize
@@ -12,6 +13,8 @@ __all__ = [
     "TurboResult",
     "estimate_channel",
     "turbo_equalize",
+    "decode_frame",
+    "fractional_samples",
     "DfeResult",
     "DfeSettings",
     "dfe_equalize",

@@ -14,9 +14,11 @@ Tuning guidance
   that a first arrival weaker than a later one is still captured. For 3 ms of
   spread at 6.4 kBd and 2 samples/symbol: about 2·20 + 8 taps.
 - ``n_fb`` (feedback taps, in symbols) should cover the post-cursor spread.
-- RLS: ``forgetting`` λ in [0.99, 0.999]; effective memory 1/(1 − λ) symbols.
-  Converges in ~2× the number of taps, hence 150 pilots for ~60 taps. Costs
-  O(N²) per symbol.
+- RLS: ``forgetting`` λ in [0.99, 0.9995]; effective memory 1/(1 − λ) symbols,
+  which should be ≥ 10× the number of taps N or the tap noise eats the output
+  SNR (64 taps at λ = 0.995 lost 9 dB against λ = 0.999 in a jmse2024 test).
+  Converges in ~2N symbols, hence 150 pilots for up to ~70 taps. Costs O(N²)
+  per symbol.
 - NLMS: ``step`` μ in [0.01, 0.1]; O(N) per symbol but slower convergence:
   needs more training than 150 pilots give for long filters.
 - PLL: ``pll_kp`` ≈ 0.01–0.05 and ``pll_ki`` ≈ kp²/4 (critically damped);
@@ -44,7 +46,7 @@ class DfeSettings:
     ff_centre: int = 8
     n_fb: int = 8
     algorithm: str = "rls"
-    forgetting: float = 0.995
+    forgetting: float = 0.999
     step: float = 0.05
     pll_kp: float = 0.02
     pll_ki: float = 1e-4
@@ -102,6 +104,8 @@ def _dfe(x, sps, n_sym, train, n_train, n_ff, ff_centre, n_fb, use_rls, lam, mu,
     w[ff_centre] = 1.0
     P = np.eye(n, dtype=np.complex128) / delta
     u = np.zeros(n, dtype=np.complex128)
+    Pu = np.zeros(n, dtype=np.complex128)
+    g = np.zeros(n, dtype=np.complex128)
     past = np.zeros(max(n_fb, 1), dtype=np.complex128)
     soft = np.empty(n_sym, dtype=np.complex128)
     dec = np.empty(n_sym, dtype=np.complex128)
@@ -135,13 +139,26 @@ def _dfe(x, sps, n_sym, train, n_train, n_ff, ff_centre, n_fb, use_rls, lam, mu,
             d = points[best]
         e = d - z
         if use_rls:
-            Pu = P @ u
-            denom = lam + np.real(np.vdot(u, Pu))
-            g = Pu / denom
-            w += g * np.conj(e)
-            P = (P - np.outer(g, np.conj(u) @ P)) / lam
+            # P is Hermitian, so uᴴP = (Pu)ᴴ: one matrix-vector product, then a rank-one downdate in place
+            denom = lam
+            for i in range(n):
+                acc = 0.0j
+                for j in range(n):
+                    acc += P[i, j] * u[j]
+                Pu[i] = acc
+                denom += np.real(np.conj(u[i]) * acc)
+            for i in range(n):
+                g[i] = Pu[i] / denom
+                w[i] += g[i] * np.conj(e)
+            for i in range(n):
+                for j in range(n):
+                    P[i, j] = (P[i, j] - g[i] * np.conj(Pu[j])) / lam
         else:
-            w += mu * u * np.conj(e) / (1e-9 + np.real(np.vdot(u, u)))
+            norm = 1e-9
+            for i in range(n):
+                norm += np.real(np.conj(u[i]) * u[i])
+            for i in range(n):
+                w[i] += mu * u[i] * np.conj(e) / norm
         # phase detector on the feedforward output, then a proportional-integral loop
         err = np.imag(p * np.conj(d))
         integ += ki * err
