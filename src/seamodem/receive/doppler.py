@@ -31,7 +31,7 @@ import scipy.signal
 
 from ..config import FrameConfig
 from ..transmit.frame import tone_envelope
-from ..transmit.pulse import srrc_matrix
+from ..transmit.pulse import srrc_pulse, srrc_truncation_energy
 
 __all__ = [
     "matched_filter",
@@ -96,19 +96,26 @@ def matched_filter(
         With r = A Σ x_k √T' g_{T'}(t − t_k) e^{j2πΔf(t − t_ref)}, y_k = A x_k.
     """
     T = config.symbol_period_s / scale
-    half = (config.srrc_span_symbols // 2) * T
-    n_lo = max(0, int(math.floor((np.min(symbol_times_s) - half - t0_s) * fs)))
-    n_hi = min(len(r), int(math.ceil((np.max(symbol_times_s) + half - t0_s) * fs)) + 1)
+    n_half = config.srrc_span_symbols // 2
+    half = n_half * T
+    tk = np.asarray(symbol_times_s, dtype=float)
+    n_lo = max(0, int(math.floor((np.min(tk) - half - t0_s) * fs)))
+    n_hi = min(len(r), int(math.ceil((np.max(tk) + half - t0_s) * fs)) + 1)
     if n_hi <= n_lo:
-        return np.zeros(len(symbol_times_s), complex)
-    ts = t0_s + np.arange(n_lo, n_hi) / fs
-    g = srrc_matrix(
-        ts, symbol_times_s, symbol_period_s=T, rolloff=config.rolloff, span_symbols=config.srrc_span_symbols
-    )
+        return np.zeros(len(tk), complex)
     x = r[n_lo:n_hi]
     if carrier_offset_hz:
-        x = x * np.exp(-2j * np.pi * carrier_offset_hz * (ts - t_ref_s))
-    return (g.T @ x) / (fs * T)
+        x = x * np.exp(-2j * np.pi * carrier_offset_hz * (t0_s + np.arange(n_lo, n_hi) / fs - t_ref_s))
+    # dense gather of each symbol's support (faster than a sparse matrix for one product)
+    width = int(math.ceil(2 * half * fs)) + 2
+    first = np.ceil((tk - half - t0_s) * fs - 1e-9).astype(np.int64)
+    idx = first[:, None] + np.arange(width)[None, :]
+    u = t0_s + idx / fs - tk[:, None]
+    inside = (idx >= n_lo) & (idx < n_hi) & (np.abs(u) <= half)
+    g = srrc_pulse(u, T, config.rolloff) * inside
+    samples = x[np.clip(idx - n_lo, 0, n_hi - n_lo - 1)]
+    norm = np.sqrt(T / srrc_truncation_energy(float(config.rolloff), n_half)) / (fs * T)
+    return np.einsum("kn,kn->k", g, samples) * norm
 
 
 def _pilot_outputs(r, fs, t0_s, config: FrameConfig, t_start_s: float, eps: float) -> np.ndarray:
@@ -201,7 +208,7 @@ def fit_pilot(
     Doppler bank and dichotomy: paper 002 §II.B (Trubuil & Chonavel). The
     correlation is real and symmetric about its peak in t_a, so the parabola
     through three points centred near the peak is unbiased once centred; two
-    passes (h = T/2, T/8, T/32, then T/32 after the Doppler update) make it so.
+    passes (h = T/2, T/16, then T/32 after the Doppler update) make it so.
     """
     f0 = config.carrier_hz
     T = config.symbol_period_s
@@ -225,7 +232,7 @@ def fit_pilot(
         eps += delta
         width = max(abs(delta), width / 8)
         # the coarse start is within half a baseband sample: wide steps first
-        for h in (T / 2, T / 8, T / 32) if it == 0 else (T / 32,):
+        for h in (T / 2, T / 16) if it == 0 else (T / 32,):
             fm, fc, fp = corr(t - h, eps), corr(t, eps), corr(t + h, eps)
             curvature = fm - 2 * fc + fp
             if curvature < 0:
