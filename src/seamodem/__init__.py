@@ -10,6 +10,17 @@ from ._version import __version__
 from .config import PRESETS, FrameConfig, get_preset, load_config, save_config
 from .dsp import bb2pb, pb2bb
 from .errors import ConfigError, InputFileError, PayloadError, SeamodemError
+from .channel import (
+    Scenario,
+    apply_doppler,
+    load_scenario,
+    read_replay_channel,
+    replay,
+    simulate,
+    simulate_file,
+    sound_speed_mackenzie,
+    thorp_absorption_db_per_km,
+)
 from .transmit import *  # noqa: F403
 from .transmit import __all__ as _transmit_all
 from .receive import (
@@ -37,6 +48,15 @@ __all__ = [
     "InputFileError",
     "PayloadError",
     "SeamodemError",
+    "Scenario",
+    "apply_doppler",
+    "load_scenario",
+    "read_replay_channel",
+    "replay",
+    "simulate",
+    "simulate_file",
+    "sound_speed_mackenzie",
+    "thorp_absorption_db_per_km",
     *_transmit_all,
     "Emissions",
     "MeasurementRecord",
