@@ -193,3 +193,28 @@ def test_example_scenarios_run(beacon, tmp_path, capsys, path):
     side = json.loads(out.with_suffix(".json").read_text())
     assert len(side["truth"]) == 3 and all(row["snr_db"] is not None for row in side["truth"])
     assert np.all(np.isfinite(soundfile.read(out)[0]))
+
+
+def test_loud_output_is_scaled_below_full_scale(tmp_path):
+    # two equal echoes on a 0.5-peak input reach ≈ 1.0: the output must be scaled, the gain recorded
+    import json
+
+    import soundfile
+
+    from seamodem.cli import main
+
+    beacon = tmp_path / "b.wav"
+    assert main(["tx", "--count", "1", "--period", "1", "--peak", "0.9", "-q", "-o", str(beacon)]) == 0
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        'mode = "profile"\nseed = 3\n[environment]\nsound_speed_mps = 1500.0\n'
+        '[doppler]\ninitial_range_m = 100.0\ncomponents = [{kind = "constant", v_mps = 0.0}]\n'
+        '[multipath]\npaths = [{delay_s = 0.0005, gain = 0.9}]\n'
+    )
+    out = tmp_path / "r.wav"
+    assert main(["channel", str(beacon), "--scenario", str(scenario), "-o", str(out)]) == 0
+    x, _ = soundfile.read(out)
+    side = json.loads(out.with_suffix(".json").read_text())
+    gain = side["channel"]["output"]["gain"]
+    assert gain < 1 and np.max(np.abs(x)) == pytest.approx(0.5, rel=1e-6)
+    assert side["recording"]["peak"] == pytest.approx(0.5, rel=1e-6)

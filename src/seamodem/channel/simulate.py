@@ -337,6 +337,28 @@ def read_input(in_wav: str | Path) -> tuple[soundfile._SoundFileInfo, dict, Fram
     return info, side_in, FrameConfig.from_dict(side_in["config"])
 
 
+#: An output whose peak exceeds this fraction of full scale is scaled down to OUTPUT_PEAK, so that
+#: no sample reaches full scale (a receiver would take it for clipping). Truth and SNR are unchanged.
+OUTPUT_PEAK_LIMIT = 0.9
+OUTPUT_PEAK = 0.5
+
+
+def _rescale_wav(path: Path, gain: float, fs: int, block: int = 1 << 20) -> None:
+    """Multiply a float WAV by ``gain`` in place (through a temporary beside it, in blocks)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{Path(path).name}.", suffix=".gain", dir=Path(path).parent)
+    os.close(fd)
+    try:
+        with soundfile.SoundFile(str(path)) as fin, soundfile.SoundFile(
+            tmp, "w", samplerate=fs, channels=1, subtype="FLOAT", format="WAV"
+        ) as fout:
+            for chunk in fin.blocks(blocksize=block, dtype="float64"):
+                fout.write(gain * chunk)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
 def write_outputs(in_wav: str | Path, out_wav: str | Path, side_in: dict, produce, *, command: str) -> dict[str, Any]:
     """Run ``produce(fin, sink, make_scratch) -> (truth, channel)`` and write OUT.wav + OUT.json atomically.
 
@@ -370,6 +392,12 @@ def write_outputs(in_wav: str | Path, out_wav: str | Path, side_in: dict, produc
         finally:
             for s in scratches:
                 s.close()
+        gain = 1.0
+        if peak > OUTPUT_PEAK_LIMIT:
+            gain = OUTPUT_PEAK / peak
+            _rescale_wav(tmp_wav, gain, fs)
+            peak *= gain
+        channel["output"]["gain"] = gain
         channel["command"] = command
         channel["input"] = in_wav.name
         channel["input_recording"] = rec
