@@ -12,6 +12,7 @@ long the recording.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -30,6 +31,7 @@ from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mp
 from .detect import Detection, PilotDetector, doppler_bin_spacing_hz
 from .doppler import PilotFit, ToneFit, fit_pilot, tone_frequency_ml, tone_segment, tone_track_eq9
 from .frontend import FrontEnd, FrontEndPlan, plan_front_end
+from .multipath import PathFit, fit_paths
 from .records import MeasurementRecord
 from .two_way import two_way_range_m
 
@@ -99,6 +101,8 @@ class FrameMeasurement:
         Arrival time, pilot (filter-bank) Doppler, gain, SNR.
     tone : ToneFit
         ML tone frequency and C/N0.
+    paths : PathFit
+        Paths resolved in the pilot correlation; the arrival is the first.
     v_tone_ml_mps, v_tone_eq9_mps : float
         Mean closing speed from the tone: ML and eq 9 [m/s].
     track_t_s, track_v_mps : numpy.ndarray
@@ -110,6 +114,7 @@ class FrameMeasurement:
     detection: Detection
     pilot: PilotFit
     tone: ToneFit
+    paths: PathFit
     v_tone_ml_mps: float
     v_tone_eq9_mps: float
     track_t_s: np.ndarray
@@ -154,6 +159,12 @@ def measure_frame(
         search_hz=doppler_bin_spacing_hz(config),
         sound_speed_mps=c,
     )
+    paths = fit_paths(
+        bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, t_start_s=fit.t_start_s, eps=fit.v_mps / c
+    )
+    if len(paths.delays_s) > 1:
+        # unresolved echoes pull the single-path fit towards them: take the first path's delay
+        fit = dataclasses.replace(fit, t_start_s=paths.first_s)
     scale = 1 + fit.v_mps / c
     x, t, w = tone_segment(tone, plan.fs_tone, tone_t0_s, config=config, t_start_s=fit.t_start_s, scale=scale)
     f_max = v_max_mps * config.tone_hz / c
@@ -169,6 +180,7 @@ def measure_frame(
         detection=detection,
         pilot=fit,
         tone=tfit,
+        paths=paths,
         v_tone_ml_mps=tfit.offset_hz * c / config.tone_hz,
         v_tone_eq9_mps=float(np.mean(track_v)) if track_v.size else math.nan,
         track_t_s=track_t,
