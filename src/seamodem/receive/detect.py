@@ -155,7 +155,7 @@ class PilotDetector:
         self.context = int(0.5 * fs)
 
     def _bank_power(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """|c_b[j]|² for every bin b and full-overlap lag j; each lag's best bin and its power.
+        """|c_b[j]|² at every 4th lag of every bin b; each full-overlap lag's best bin and its power.
 
         One FFT of r and one inverse per bin.
         The replica of bin b is p[i]·e^{j2π m_b i/N}, whose transform is P rolled by
@@ -166,16 +166,16 @@ class PilotDetector:
         spectrum = scipy.fft.fft(r, n)
         pilot = np.conj(scipy.fft.fft(self.template, n))
         shifts = np.round(self.doppler_hz * n / self.fs).astype(np.int64)
-        power = np.empty((len(shifts), n_out))
+        sample = np.empty((len(shifts), -(-n_out // 4)))  # every 4th lag, for the noise median
         best = np.zeros(n_out, dtype=np.int64)
         peak = np.zeros(n_out)
         for b, m in enumerate(shifts):
             c = scipy.fft.ifft(spectrum * np.roll(pilot, m))[:n_out]
-            power[b] = c.real**2 + c.imag**2
-            better = power[b] > peak
-            best[better] = b
-            np.maximum(peak, power[b], out=peak)
-        return power, best, peak
+            power = c.real**2 + c.imag**2
+            sample[b] = power[::4]
+            best[power > peak] = b
+            np.maximum(peak, power, out=peak)
+        return sample, best, peak
 
     def statistics(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """z, ρ, best bin and |c| for every full-overlap lag of ``r``.
@@ -183,10 +183,9 @@ class PilotDetector:
         Returns arrays of length len(r) − L + 1 (L the template length), lag j
         meaning the template starts at r[j].
         """
-        power, best, peak = self._bank_power(r)
-        # every 4th lag is plenty for the median; the floor (60 dB under the block's
-        # peak) keeps z finite in a noiseless recording
-        noise = max(np.median(power[:, ::4]) / math.log(2), 1e-6 * float(np.max(peak)))
+        sample, best, peak = self._bank_power(r)
+        # the floor (60 dB under the block's peak) keeps z finite in a noiseless recording
+        noise = max(np.median(sample) / math.log(2), 1e-6 * float(np.max(peak)))
         energy = np.cumsum(np.concatenate([[0.0], np.abs(r) ** 2]))
         window = energy[self.length :] - energy[: -self.length]
         rho = peak / (self.template_energy * np.maximum(window, np.finfo(float).tiny))

@@ -75,6 +75,7 @@ def fit_paths(
     pilot: np.ndarray,
     t_start_s: float,
     eps: float,
+    es_n0: float = math.inf,
     half_window_symbols: float = 6.0,
     max_paths: int = 3,
     min_fraction: float = 0.15,
@@ -92,6 +93,12 @@ def fit_paths(
         Single-path estimate of the frame start [s].
     eps : float
         Doppler v/c (its carrier offset f0·ε is removed first).
+    es_n0 : float
+        Measured Es/N0 of the pilot (linear). A new path must also stand
+        3.5 noise deviations above zero: the correlation noise relative to a
+        path's peak is 1/√(Np·Es/N0), and a complex Gaussian exceeds 3.5 σ
+        with probability e^{−12} per lag; without it, noise peaks pass for
+        early paths at SNR ≲ 0 dB.
     """
     T = config.symbol_period_s
     a = np.asarray(pilot, dtype=complex)
@@ -135,14 +142,19 @@ def fit_paths(
 
     # the single-path estimate is the first path; only a second path that passes the
     # test costs the joint refinement, so a clean frame pays for one trial
+    noise_fraction = 3.5 / math.sqrt(n_p * es_n0)
     delays = [float(t_start_s)]
     amps, _ = solve(delays)
+    threshold = max(min_fraction, noise_fraction)
+    peak_response = float(np.sum(rho * raised_cosine(lags * T, T, config.rolloff)))  # R(0)
     for _ in range(max_paths - 1):
         resid = corr - model(delays) @ amps
+        if np.max(np.abs(resid)) < threshold * np.max(np.abs(amps)) * peak_response:
+            break  # nothing left that could be a path: spare the refinement
         trial = delays + [float(cand[int(np.argmax(np.abs(resid)))])]
         refine(trial, len(trial) - 1, 1.0 / fs)
         b, _ = solve(trial)
-        if abs(b[-1]) < min_fraction * np.max(np.abs(b)):
+        if abs(b[-1]) < threshold * np.max(np.abs(b)):
             break
         delays = trial
         for i in range(len(delays)):

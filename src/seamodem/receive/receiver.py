@@ -160,7 +160,14 @@ def measure_frame(
         sound_speed_mps=c,
     )
     paths = fit_paths(
-        bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, t_start_s=fit.t_start_s, eps=fit.v_mps / c
+        bb,
+        plan.fs_data,
+        bb_t0_s,
+        config=config,
+        pilot=pilot,
+        t_start_s=fit.t_start_s,
+        eps=fit.v_mps / c,
+        es_n0=fit.es_n0,
     )
     if len(paths.delays_s) > 1:
         # unresolved echoes pull the single-path fit towards them: take the first path's delay
