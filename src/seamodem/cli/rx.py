@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import InputFileError, SeamodemError
 from ..io.files import atomic_outputs, check_writable
 from ..io.sidecar import read_sidecar, sidecar_path
-from ..io.wav import wav_info
+from ..io.wav import wav_channel
 from ..receive.receiver import Emissions, ReceiverWarning, receive_file
 from ..receive.records import write_measurements
 from ._common import add_config_options, command_line, config_from_args
@@ -105,9 +105,7 @@ def run(args: argparse.Namespace) -> int:
     out = check_writable(args.output)
     if out.suffix.lower() not in (".csv", ".jsonl"):
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
-    info = wav_info(args.recording)
-    if info.frames == 0:
-        raise InputFileError(f"recording {args.recording} holds no samples")
+    info, _ = wav_channel(args.recording, channel=args.channel)
     sidecar = _sidecar_for(args)
     if sidecar is not None and not args.config:
         args.config = str(sidecar_path(args.recording))

@@ -10,7 +10,7 @@ import soundfile
 
 from ..errors import InputFileError
 
-__all__ = ["SUBTYPES", "write_wav_blocks", "read_wav", "wav_info"]
+__all__ = ["SUBTYPES", "write_wav_blocks", "read_wav", "wav_info", "wav_channel"]
 
 #: CLI names of the sample formats → soundfile subtypes.
 SUBTYPES = {"float32": "FLOAT", "pcm16": "PCM_16", "pcm24": "PCM_24"}
@@ -71,6 +71,26 @@ def wav_info(path: str | Path) -> soundfile._SoundFileInfo:
     return info
 
 
+def wav_channel(path: str | Path, *, channel: int | None = None) -> tuple[soundfile._SoundFileInfo, int]:
+    """Header of a recording that holds samples, and the channel to read (0 for mono).
+
+    Raises
+    ------
+    InputFileError
+        As :func:`wav_info`; no samples; several channels and ``channel`` not
+        given; a channel that does not exist.
+    """
+    info = wav_info(path)
+    if info.frames == 0:
+        raise InputFileError(f"recording {path} holds no samples")
+    if info.channels > 1 and channel is None:
+        raise InputFileError(f"recording {path} has {info.channels} channels: choose one with --channel")
+    ch = 0 if channel is None else int(channel)
+    if not 0 <= ch < info.channels:
+        raise InputFileError(f"channel {ch} does not exist in {path} ({info.channels} channels)")
+    return info, ch
+
+
 def read_wav(path: str | Path, *, channel: int | None = None) -> tuple[np.ndarray, int]:
     """Read one channel of an audio file as float64 in [−1, 1].
 
@@ -92,14 +112,7 @@ def read_wav(path: str | Path, *, channel: int | None = None) -> tuple[np.ndarra
         Missing, empty, truncated or unreadable file; no samples; NaN or
         infinite samples; a channel that does not exist.
     """
-    info = wav_info(path)
-    if info.frames == 0:
-        raise InputFileError(f"recording {path} holds no samples")
-    if info.channels > 1 and channel is None:
-        raise InputFileError(f"recording {path} has {info.channels} channels: choose one with --channel")
-    ch = 0 if channel is None else int(channel)
-    if not 0 <= ch < info.channels:
-        raise InputFileError(f"channel {ch} does not exist in {path} ({info.channels} channels)")
+    info, ch = wav_channel(path, channel=channel)
     try:
         data, fs = soundfile.read(str(path), dtype="float64", always_2d=True)
     except (soundfile.LibsndfileError, RuntimeError) as exc:

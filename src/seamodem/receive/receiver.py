@@ -25,7 +25,7 @@ import soundfile
 from .._progress import progress_bar
 from ..config import FrameConfig
 from ..errors import ConfigError, InputFileError
-from ..io.wav import wav_info
+from ..io.wav import wav_channel
 from ..transmit.pilot import pilot_symbols
 from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
 from .detect import Detection, PilotDetector, doppler_bin_spacing_hz
@@ -464,14 +464,7 @@ def receive_file(
         Silent or clipped recording; no frame found.
     """
     path = Path(path)
-    info = wav_info(path)
-    if info.frames == 0:
-        raise InputFileError(f"recording {path} holds no samples")
-    if info.channels > 1 and channel is None:
-        raise InputFileError(f"recording {path} has {info.channels} channels: choose one with --channel")
-    ch = 0 if channel is None else int(channel)
-    if not 0 <= ch < info.channels:
-        raise InputFileError(f"channel {ch} does not exist in {path} ({info.channels} channels)")
+    info, ch = wav_channel(path, channel=channel)
     rx = Receiver(config, emissions=emissions, **receiver_options)
     blocks = _file_blocks(path, info, ch, 1 << 19, progress)
     n = 0
