@@ -208,7 +208,7 @@ def fit_pilot(
     Doppler bank and dichotomy: paper 002 §II.B (Trubuil & Chonavel). The
     correlation is real and symmetric about its peak in t_a, so the parabola
     through three points centred near the peak is unbiased once centred; two
-    passes (h = T/2, T/16, then T/32 after the Doppler update) make it so.
+    passes (h = T/2, T/8, then twice T/32 after the Doppler update) make it so.
     """
     f0 = config.carrier_hz
     T = config.symbol_period_s
@@ -232,7 +232,7 @@ def fit_pilot(
         eps += delta
         width = max(abs(delta), width / 8)
         # the coarse start is within half a baseband sample: wide steps first
-        for h in (T / 2, T / 16) if it == 0 else (T / 32,):
+        for h in (T / 2, T / 8) if it == 0 else (T / 32, T / 32):
             fm, fc, fp = corr(t - h, eps), corr(t, eps), corr(t + h, eps)
             curvature = fm - 2 * fc + fp
             if curvature < 0:
