@@ -39,9 +39,13 @@ def test_fft_doppler_bank_equals_direct_correlation():
         replica = det.template * np.exp(2j * np.pi * m * np.arange(det.length) / fft_n)
         power.append(np.abs(scipy.signal.correlate(r, replica, mode="valid")) ** 2)
     power = np.array(power)
-    np.testing.assert_allclose(sample, power[:, ::4], rtol=1e-9, atol=1e-9)
-    np.testing.assert_array_equal(best, np.argmax(power, axis=0))
-    np.testing.assert_allclose(peak, np.max(power, axis=0), rtol=1e-9, atol=1e-9)
+    # single-precision FFTs: relative errors ≈ 1e-7 of the largest |c|² (≈ 4e3 here)
+    scale = np.max(power)
+    np.testing.assert_allclose(sample, power[:, ::4], rtol=0, atol=1e-5 * scale)
+    np.testing.assert_allclose(peak, np.max(power, axis=0), rtol=0, atol=1e-5 * scale)
+    top2 = np.sort(power, axis=0)[-2:]
+    clear = top2[1] - top2[0] > 1e-4 * scale  # where two bins tie within rounding, either may win
+    np.testing.assert_array_equal(best[clear], np.argmax(power, axis=0)[clear])
 
 
 def test_dichotomy_and_tone_ml_on_a_clean_tone():
