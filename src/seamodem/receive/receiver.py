@@ -42,6 +42,7 @@ __all__ = [
     "Receiver",
     "receive_file",
     "ReceiverWarning",
+    "in_band_snr_db",
 ]
 
 
@@ -98,7 +99,10 @@ class FrameMeasurement:
     ----------
     detection : Detection
     pilot : PilotFit
-        Arrival time, pilot (filter-bank) Doppler, gain, SNR.
+        Arrival time (of the first path), pilot (filter-bank) Doppler, gain,
+        and the in-band SNR from the powers around and in the frame
+        (:func:`in_band_snr_db`; from the pilot residual when no noise window
+        is available).
     tone : ToneFit
         ML tone frequency and C/N0.
     paths : PathFit
@@ -183,6 +187,9 @@ def measure_frame(
     track_t = (t[:-1] + 0.5 / plan.fs_tone)[interior]
     track_v = v_track[interior]
     complete = fit.t_start_s + config.frame_duration_s / scale <= tone_t0_s + len(tone) / plan.fs_tone
+    snr_db = in_band_snr_db(bb, plan, bb_t0_s, t_start_s=fit.t_start_s, duration_s=config.frame_duration_s / scale)
+    if snr_db is not None:
+        fit = dataclasses.replace(fit, snr_db=snr_db)
     return FrameMeasurement(
         detection=detection,
         pilot=fit,
@@ -194,6 +201,46 @@ def measure_frame(
         track_v_mps=track_v,
         complete=bool(complete),
     )
+
+
+#: noise is measured in this window before and after a frame [s] (gap to the frame, length)
+NOISE_GAP_S, NOISE_WINDOW_S = 0.005, 0.05
+
+
+def in_band_snr_db(bb: np.ndarray, plan: FrontEndPlan, t0_s: float, *, t_start_s: float, duration_s: float):
+    """In-band SNR of SPEC §1 from powers: (frame power − noise power) / noise power in B.
+
+    The noise PSD comes from the data baseband just before and just after the
+    frame (the smaller of the two medians, so that a neighbouring frame or a
+    late echo in one window does not count as noise); the signal power is the
+    frame's mean power minus the noise. Unlike the pilot residual, echoes count
+    as signal here, as the SPEC defines it. Returns None when neither noise
+    window is available (frames back to back, start or end of the recording).
+
+    Notes
+    -----
+    |bb|² of complex Gaussian noise is exponential: mean = median/ln 2. Its mean
+    is S·ENBW (S the baseband PSD, ENBW the front end's noise bandwidth), the
+    in-band noise S·B.
+    """
+    fs = plan.fs_data
+    windows = (
+        (t_start_s - NOISE_GAP_S - NOISE_WINDOW_S, t_start_s - NOISE_GAP_S),
+        (t_start_s + duration_s + NOISE_GAP_S, t_start_s + duration_s + NOISE_GAP_S + NOISE_WINDOW_S),
+    )
+    levels = []
+    for a, b in windows:
+        lo, hi = int(math.ceil((a - t0_s) * fs)), int(math.floor((b - t0_s) * fs))
+        if lo >= 0 and hi <= len(bb) and hi - lo >= 0.8 * NOISE_WINDOW_S * fs:
+            levels.append(np.median(np.abs(bb[lo:hi]) ** 2) / math.log(2))
+    lo = max(0, int(math.ceil((t_start_s + 0.01 - t0_s) * fs)))
+    hi = min(len(bb), int(math.floor((t_start_s + duration_s - 0.01 - t0_s) * fs)))
+    if not levels or hi <= lo:
+        return None
+    noise = min(levels)
+    signal = np.mean(np.abs(bb[lo:hi]) ** 2) - noise
+    in_band = noise * (plan.data.passband_hz * 2) / plan.noise_bandwidth_hz("data")
+    return 10 * math.log10(max(signal, 1e-30 * noise) / max(in_band, np.finfo(float).tiny))
 
 
 class Receiver:
@@ -311,6 +358,7 @@ class Receiver:
         self.plan, self.detector = plan, det
         # a frame may be stretched by |v|/c; the tone and pulse tails need a little more
         frame_span = cfg.frame_duration_s * (1 + self.v_max_mps / self.sound_speed_mps) + 0.02
+        frame_span += NOISE_GAP_S + NOISE_WINDOW_S  # the noise window after the frame
         state = _Buffers()
         scan_from = 0
         pending: list[Detection] = []
@@ -353,7 +401,7 @@ class Receiver:
             found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=False)
             pending.extend(found)
             yield from ready(final=False)
-            oldest = min([scan_from - det.context - det.length] + [int(d.t_start_s * plan.fs_data) - 64 for d in pending])
+            oldest = min([scan_from - det.context - det.length] + [int((d.t_start_s - NOISE_GAP_S - NOISE_WINDOW_S) * plan.fs_data) - 64 for d in pending])
             state.trim(oldest, plan)
         bb, tone = fe.flush()
         state.append(bb, tone)

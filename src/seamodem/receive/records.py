@@ -49,7 +49,9 @@ class MeasurementRecord:
     v_r_mps : float
         Mean closing speed over the frame, tone maximum-likelihood estimate [m/s].
     snr_db : float
-        Measured in-band SNR (SPEC §1) from the pilot [dB].
+        Measured in-band SNR (SPEC §1): frame power over the noise measured
+        just before and after the frame, in B [dB]; from the pilot residual
+        (echoes then count as noise) when no noise window exists.
     v_r_tone_eq9_mps : float
         Mean of the tone phase-derivative track, paper 000 eq 9 [m/s].
     v_r_bank_mps : float
