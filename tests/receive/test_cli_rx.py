@@ -168,3 +168,19 @@ def test_records_round_trip(tmp_path):
         write_measurements(path, [rec], {"sound_speed_mps": 1500.0})
         back, header = read_measurements(path)
         assert back == [rec] and header["sound_speed_mps"] == 1500.0
+
+
+def test_two_way_ranging_from_the_command_line(tmp_path):
+    """Polls at 0.1 + 2k s; the beacon, 300 m away, replies 0.5 s after hearing each poll."""
+    d, turnaround, c = 300.0, 0.5, 1500.0
+    first_reply = 0.1 + turnaround + 2 * d / c  # the reply's frame start at the vehicle
+    wav = tmp_path / "replies.wav"
+    write_beacon(wav, CFG, BeaconSchedule(count=2, period_s=2.0, start_s=first_reply), progress=False)
+    out = tmp_path / "m.csv"
+    argv = ["rx", str(wav), "--emit-start", "0.1", "--emit-period", "2", "--turnaround", str(turnaround), "-o",
+            str(out), "-q"]
+    assert main(argv) == 0
+    recs, header = read_measurements(out)
+    assert header["turnaround_s"] == turnaround
+    assert [r.frame_index for r in recs] == [0, 1] and all(r.two_way for r in recs)
+    assert np.allclose([r.range_m for r in recs], d, atol=1e-3)  # noise-free: the 0.4 mm self-noise, halved
