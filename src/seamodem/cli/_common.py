@@ -7,9 +7,13 @@ import json
 import shlex
 import sys
 
-from ..config import FrameConfig, get_preset, load_config
+from pathlib import Path
 
-__all__ = ["add_config_options", "config_from_args", "command_line"]
+from ..config import FrameConfig, get_preset, load_config
+from ..errors import SeamodemError
+from ..io.files import check_writable
+
+__all__ = ["add_config_options", "config_from_args", "command_line", "output_path"]
 
 
 def add_config_options(parser: argparse.ArgumentParser) -> None:
@@ -60,3 +64,11 @@ def set_argv(argv: list[str]) -> None:
 def command_line() -> str:
     """This invocation, as a shell command, for the sidecars."""
     return shlex.join(["seamodem", *(sys.argv[1:] if _ARGV is None else _ARGV)])
+
+
+def output_path(path: str | Path, suffix: str) -> Path:
+    """The ``-o`` path, checked for its suffix and a writable folder before any work."""
+    out = Path(path)
+    if out.suffix.lower() != suffix:
+        raise SeamodemError(f"output: must be a {suffix} path, got {str(out)!r}")
+    return check_writable(out)

@@ -6,8 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..errors import SeamodemError
-from ..io.files import check_writable
-from ._common import command_line
+from ._common import command_line, output_path
 
 
 def add_parser(sub) -> None:
@@ -36,10 +35,7 @@ def run(args: argparse.Namespace) -> int:
     from ..channel.replay import replay_file
     from ..channel.simulate import simulate_file
 
-    out = Path(args.output)
-    if out.suffix.lower() != ".wav":
-        raise SeamodemError(f"output: must be a .wav path, got {str(out)!r}")
-    check_writable(out)
+    out = output_path(args.output, ".wav")
     if Path(args.input).resolve() == out.resolve():
         raise SeamodemError("output: must differ from the input recording")
     scenario = load_scenario(args.scenario)

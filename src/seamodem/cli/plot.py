@@ -6,10 +6,10 @@ import argparse
 from pathlib import Path
 
 from ..config import FrameConfig
-from ..errors import SeamodemError
-from ..io.files import atomic_outputs, check_writable
+from ..io.files import atomic_outputs
 from ..io.sidecar import read_sidecar, sidecar_path
 from ..io.wav import read_wav
+from ._common import output_path
 
 
 def add_parser(sub) -> None:
@@ -33,10 +33,7 @@ def run(args: argparse.Namespace) -> int:
     from ..plots import plot_recording
 
     wav = Path(args.recording)
-    out = Path(args.output) if args.output else wav.with_suffix(".png")
-    if out.suffix.lower() != ".png":
-        raise SeamodemError(f"output: must be a .png path, got {str(out)!r}")
-    check_writable(out)
+    out = output_path(args.output or wav.with_suffix(".png"), ".png")
     x, fs = read_wav(wav, channel=args.channel)
     config = None
     if sidecar_path(wav).is_file():

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import InputFileError, SeamodemError
-from ..io.files import check_writable
+from ..errors import InputFileError
 from ..io.wav import SUBTYPES
 from ..transmit.beacon import (
     DEFAULT_PAYLOAD_TEXT,
@@ -15,7 +14,7 @@ from ..transmit.beacon import (
     payloads_from_text,
     write_beacon,
 )
-from ._common import add_config_options, command_line, config_from_args
+from ._common import add_config_options, command_line, config_from_args, output_path
 
 
 def add_parser(sub) -> None:
@@ -47,10 +46,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    out = Path(args.output)
-    if out.suffix.lower() != ".wav":
-        raise SeamodemError(f"output: must be a .wav path, got {str(out)!r}")
-    check_writable(out)
+    out = output_path(args.output, ".wav")
     config = config_from_args(args)
     if args.payload_file:
         path = Path(args.payload_file)
