@@ -56,7 +56,7 @@ def _frames(n, *, v, snr_db, seed, accel=0.0, paths=((0.0, 1.0, 1.0),)):
             lo, hi = int((ta + delay - 0.006) * FS), min(total, int((ta + delay + CFG.frame_duration_s + 0.01) * FS))
             t = np.arange(lo, hi) / FS
             x[lo:hi] += received_frame(
-                frame, FS, t, t_arrival_s=ta + delay, v_mps=v * factor, accel_mps2=accel * factor, gain=gain
+                frame, t, t_arrival_s=ta + delay, v_mps=v * factor, accel_mps2=accel * factor, gain=gain
             )
     x += awgn_sigma(CFG, snr_db) * rng.standard_normal(total)
     return x, arrivals

@@ -44,7 +44,6 @@ def baseband_at(frame: Frame, alpha: np.ndarray) -> np.ndarray:
 
 def received_frame(
     frame: Frame,
-    fs: float,
     t_s: np.ndarray,
     *,
     t_arrival_s: float,

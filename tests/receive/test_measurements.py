@@ -38,7 +38,7 @@ def _recording(arrivals, speeds, duration_s, *, snr_db=None, gains=None, seed=0,
             lo = max(0, int((ta + delay - 0.01) * FS))
             hi = min(n, int((ta + delay + CFG.frame_duration_s + 0.01) * FS))
             x[lo:hi] += received_frame(
-                FRAME, FS, t[lo:hi], t_arrival_s=ta + delay, v_mps=v, accel_mps2=accel, gain=g * gain_p
+                FRAME, t[lo:hi], t_arrival_s=ta + delay, v_mps=v, accel_mps2=accel, gain=g * gain_p
             )
     if snr_db is not None:
         x += awgn_sigma(CFG, snr_db) * np.random.default_rng(seed).standard_normal(n)
