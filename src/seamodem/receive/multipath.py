@@ -76,7 +76,7 @@ def fit_paths(
     t_start_s: float,
     eps: float,
     es_n0: float = math.inf,
-    half_window_symbols: float = 6.0,
+    half_window_symbols: float = 12.0,
     max_paths: int = 3,
     min_fraction: float = 0.15,
     first_path_fraction: float = 0.3,
@@ -164,3 +164,43 @@ def fit_paths(
     delays_s, amps = np.asarray(delays)[order], amps[order]
     strong = np.abs(amps) >= first_path_fraction * np.max(np.abs(amps))
     return PathFit(delays_s=delays_s, amplitudes=amps, first_s=float(delays_s[np.argmax(strong)]))
+
+
+def direct_path_doppler(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    paths: PathFit,
+    eps: float,
+    search: float,
+) -> float:
+    """Pilot Doppler ε of the first path, the echoes' pilot interference removed.
+
+    The pilots' matched-filter outputs at the first path's instants hold, besides
+    A_1 a_k, each echo's pilot seen through the raised cosine:
+    y_k = Σ_p A_p Σ_m a_m rc((k − m)T − Δ_p). The A_p are fitted by least squares,
+    the echoes subtracted, and ε refined by dichotomy on the cleaned outputs as
+    in :func:`~seamodem.receive.doppler.fit_pilot` (within ε ± ``search``).
+    """
+    from .doppler import _pilot_outputs  # the pilot-output helper is private to doppler
+
+    T = config.symbol_period_s / (1 + eps)
+    a = np.asarray(pilot, dtype=complex)
+    n_p = len(a)
+    y = _pilot_outputs(r, fs, t0_s, config, paths.first_s, eps)
+    lags = np.arange(-(n_p - 1), n_p) * T
+    columns = [np.convolve(a, raised_cosine(lags - (d - paths.first_s), T, config.rolloff))[n_p - 1 : 2 * n_p - 1]
+               for d in paths.delays_s]
+    basis = np.stack(columns, axis=1)
+    amps, *_ = np.linalg.lstsq(basis, y, rcond=None)
+    first = int(np.argmin(np.abs(paths.delays_s - paths.first_s)))
+    echoes = np.delete(np.arange(len(paths.delays_s)), first)
+    weighted = np.conj(a) * (y - basis[:, echoes] @ amps[echoes])
+    tau = (config.n_guard + np.arange(n_p)) * T
+    delta = dichotomy_max(
+        lambda d: abs(weighted @ np.exp(-2j * np.pi * config.carrier_hz * d * tau)), -search, search, tol=1e-9
+    )
+    return eps + delta

@@ -31,7 +31,7 @@ from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mp
 from .detect import Detection, PilotDetector, doppler_bin_spacing_hz
 from .doppler import PilotFit, ToneFit, fit_pilot, tone_frequency_ml, tone_segment, tone_track_eq9
 from .frontend import FrontEnd, FrontEndPlan, plan_front_end
-from .multipath import PathFit, fit_paths
+from .multipath import PathFit, direct_path_doppler, fit_paths
 from .records import MeasurementRecord
 from .two_way import two_way_range_m
 
@@ -174,8 +174,19 @@ def measure_frame(
         es_n0=fit.es_n0,
     )
     if len(paths.delays_s) > 1:
-        # unresolved echoes pull the single-path fit towards them: take the first path's delay
-        fit = dataclasses.replace(fit, t_start_s=paths.first_s)
+        # unresolved echoes pull the single-path fit towards them: take the first path's
+        # delay, and its Doppler with the echoes' pilots removed
+        eps = direct_path_doppler(
+            bb,
+            plan.fs_data,
+            bb_t0_s,
+            config=config,
+            pilot=pilot,
+            paths=paths,
+            eps=fit.v_mps / c,
+            search=doppler_bin_spacing_hz(config) / config.carrier_hz,
+        )
+        fit = dataclasses.replace(fit, t_start_s=paths.first_s, v_mps=eps * c)
     scale = 1 + fit.v_mps / c
     x, t, w = tone_segment(tone, plan.fs_tone, tone_t0_s, config=config, t_start_s=fit.t_start_s, scale=scale)
     f_max = v_max_mps * config.tone_hz / c
