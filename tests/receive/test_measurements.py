@@ -192,3 +192,17 @@ def test_raised_cosine_closed_form():
     np.testing.assert_allclose(raised_cosine(np.arange(1, 6) * T, T, a), 0.0, atol=1e-12)  # Nyquist zeros
     edge = T / (2 * a)  # removable singularity: the limit equals the neighbours
     assert raised_cosine(edge, T, a) == pytest.approx(raised_cosine(edge * (1 + 1e-6), T, a), rel=1e-4)
+
+
+@pytest.mark.parametrize("kept_s", [0.04, 0.15])
+def test_frame_cut_by_the_end_of_the_recording_warns(kept_s):
+    from seamodem.receive import ReceiverWarning
+
+    ta = 0.3
+    x = _recording([ta], [2.0], ta + kept_s, snr_db=20.0, seed=10)
+    with pytest.warns(ReceiverWarning, match="cut by the end"):
+        recs, _, _ = _receive(x)
+    assert len(recs) == 1
+    assert abs(recs[0].t_arrival_s - ta) * C < 0.01  # the pilot (first 28 ms) is whole
+    if kept_s > 0.1:  # a shorter tone still measures v, less precisely (T^1.5 law)
+        assert recs[0].v_r_mps == pytest.approx(2.0, abs=0.01)

@@ -126,6 +126,10 @@ class FrameMeasurement:
     complete: bool
 
 
+#: fewer tone samples than this (a frame cut by the recording's end) give no tone Doppler
+_MIN_TONE_SAMPLES = 16
+
+
 def measure_frame(
     bb: np.ndarray,
     tone: np.ndarray,
@@ -190,10 +194,14 @@ def measure_frame(
     scale = 1 + fit.v_mps / c
     x, t, w = tone_segment(tone, plan.fs_tone, tone_t0_s, config=config, t_start_s=fit.t_start_s, scale=scale)
     f_max = v_max_mps * config.tone_hz / c
-    tfit = tone_frequency_ml(
-        x, t, w, search_hz=plan.tone.passband_hz, noise_bandwidth_hz=plan.noise_bandwidth_hz("tone")
-    )
-    v_track, settle = tone_track_eq9(x, plan.fs_tone, f_max_hz=f_max, tone_hz=config.tone_hz, sound_speed_mps=c)
+    if np.count_nonzero(w > 0.5) < _MIN_TONE_SAMPLES:  # the recording ends just after the pilot
+        tfit = ToneFit(offset_hz=math.nan, amplitude=complex(math.nan), c_n0_hz=math.nan)
+        v_track, settle = np.zeros(0), 0
+    else:
+        tfit = tone_frequency_ml(
+            x, t, w, search_hz=plan.tone.passband_hz, noise_bandwidth_hz=plan.noise_bandwidth_hz("tone")
+        )
+        v_track, settle = tone_track_eq9(x, plan.fs_tone, f_max_hz=f_max, tone_hz=config.tone_hz, sound_speed_mps=c)
     interior = slice(settle, max(settle, len(v_track) - settle))
     track_t = (t[:-1] + 0.5 / plan.fs_tone)[interior]
     track_v = v_track[interior]
