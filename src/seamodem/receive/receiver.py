@@ -533,7 +533,7 @@ def receive_file(
     path = Path(path)
     info, ch = wav_channel(path, channel=channel)
     rx = Receiver(config, emissions=emissions, **receiver_options)
-    blocks = _file_blocks(path, info, ch, 1 << 19, progress)
+    blocks = _file_blocks(path, info, ch, 1 << 20, progress)
     n = 0
     for rec in rx.run(blocks, fs=info.samplerate):
         n += 1
