@@ -150,12 +150,10 @@ def turbo_equalize(
     phase = np.repeat(dfe.phase, sps)
     phase = np.pad(phase, (0, max(0, x.size - phase.size)), mode="edge")[: x.size]
     derot = x * np.exp(-1j * phase)
-    # symbol offsets j with a nonzero contribution h[i − centre_w + centre − sps·j] to window sample i
-    centre_w = settings.ff_centre
-    j_lo = int(np.floor((0 - centre_w + centre - (n_taps - 1)) / sps))
-    j_hi = int(np.ceil((n_win - 1 - centre_w + centre) / sps))
-    offsets = np.arange(j_lo, j_hi + 1)
-    win_idx = sps * np.arange(n_sym)[:, None] - centre_w + np.arange(n_win)[None, :]
+    # The window and the channel estimate share the same centre, so window sample i of symbol k
+    # sees symbol k + j through h[i − sps·j]: offsets j from −(n_taps − 1)/sps to (n_win − 1)/sps.
+    offsets = np.arange(-((n_taps - 1) // sps), -(-(n_win - 1) // sps) + 1)
+    win_idx = sps * np.arange(n_sym)[:, None] - centre + np.arange(n_win)[None, :]
     win_ok = (win_idx >= 0) & (win_idx < derot.size)
     X = np.where(win_ok, derot[np.clip(win_idx, 0, derot.size - 1)], 0)
     for _ in range(passes - 1):
@@ -163,7 +161,7 @@ def turbo_equalize(
         h, noise_var = estimate_channel(derot, reference, sps, n_taps, centre)
         Hw = np.zeros((n_win, offsets.size), complex)
         for col, j in enumerate(offsets):
-            m = np.arange(n_win) - centre_w + centre - sps * j
+            m = np.arange(n_win) - sps * j
             ok = (m >= 0) & (m < n_taps)
             Hw[ok, col] = h[m[ok]]
         h0 = Hw[:, np.flatnonzero(offsets == 0)[0]]
