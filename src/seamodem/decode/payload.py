@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import FrameConfig
-from ..transmit.coding import interleaver_permutation, parse_info_block, pn9_sequence
+from ..transmit.coding import code_order_llr, parse_info_block
 from .demap import soft_demap
 from .viterbi import viterbi_decode
 
@@ -31,17 +31,6 @@ class DecodedPayload:
     payload: bytes
     crc_ok: bool
     info_bits: np.ndarray
-
-
-def code_order_llr(llr_air: np.ndarray, config: FrameConfig) -> np.ndarray:
-    """Undo the scrambler (sign flips) and the interleaver on LLRs in on-air order."""
-    n = config.n_coded_bits
-    llr = np.asarray(llr_air, dtype=float)[:n] * (1.0 - 2.0 * pn9_sequence(n))
-    if config.fec == "none":
-        return llr
-    out = np.empty(n)
-    out[interleaver_permutation(n)] = llr
-    return out
 
 
 def decode_payload(data_symbols: np.ndarray, noise_var: float | np.ndarray, config: FrameConfig) -> DecodedPayload:

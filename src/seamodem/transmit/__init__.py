@@ -9,7 +9,7 @@ from .beacon import (
     render_beacon,
     write_beacon,
 )
-from .coding import conv_encode, crc16_ccitt, encode_payload, parse_info_block, undo_scramble_interleave
+from .coding import code_order_llr, conv_encode, crc16_ccitt, encode_payload, parse_info_block
 from .frame import Frame, build_frame, frame_baseband, frame_sample_count, frame_symbol_times, frame_waveform
 from .modulation import bits_to_symbols, constellation, symbols_to_bits
 from .pilot import autocorrelation_sidelobes, pilot_bits, pilot_symbols
@@ -27,7 +27,7 @@ __all__ = [
     "crc16_ccitt",
     "encode_payload",
     "parse_info_block",
-    "undo_scramble_interleave",
+    "code_order_llr",
     "Frame",
     "build_frame",
     "frame_baseband",

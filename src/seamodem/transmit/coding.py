@@ -12,8 +12,8 @@ Layout of the coded block (``FrameConfig.n_coded_bits`` bits, MSB first):
 3. XOR with the PN9 sequence (x⁹ + x⁵ + 1, all-ones seed), so that a short or
    zero payload does not put spectral lines in the data band.
 
-The decoder (soft Viterbi) belongs to the receiver; this module offers the
-inverse permutation and descrambling that it needs.
+The decoder (soft Viterbi) lives in ``seamodem.decode``; this module offers the
+inverse permutation and descrambling that it needs (:func:`code_order_llr`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ __all__ = [
     "encode_info",
     "info_block",
     "parse_info_block",
-    "undo_scramble_interleave",
+    "code_order_llr",
 ]
 
 #: Generator polynomials of the K = 7 code, octal 133 and 171 (NASA/CCSDS).
@@ -179,15 +179,15 @@ def encode_info(info: np.ndarray, config: FrameConfig) -> np.ndarray:
     return coded[interleaver_permutation(n)] ^ pn9_sequence(n)
 
 
-def undo_scramble_interleave(bits: np.ndarray, config: FrameConfig) -> np.ndarray:
-    """Descramble and deinterleave received hard bits (0/1) back to code order.
+def code_order_llr(llr_air: np.ndarray, config: FrameConfig) -> np.ndarray:
+    """Undo the scrambler (sign flips) and the interleaver on LLRs in on-air order.
 
-    For soft values use the same permutation: ``out[perm] = llr * (1 − 2·pn9)``.
+    L = log P(b = 0)/P(b = 1); for hard bits pass 1 − 2·bits and read the sign.
     """
     n = config.n_coded_bits
-    bits = np.asarray(bits, dtype=np.uint8) ^ pn9_sequence(n)
+    llr = np.asarray(llr_air, dtype=float)[:n] * (1.0 - 2.0 * pn9_sequence(n))
     if config.fec == "none":
-        return bits
-    out = np.empty_like(bits)
-    out[interleaver_permutation(n)] = bits
+        return llr
+    out = np.empty(n)
+    out[interleaver_permutation(n)] = llr
     return out
