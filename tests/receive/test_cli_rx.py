@@ -1,5 +1,7 @@
 """``seamodem rx`` end to end, and every bad input of issue 4: one line, exit 2, no output file."""
 
+import dataclasses
+import math
 import json
 
 import numpy as np
@@ -161,13 +163,27 @@ def test_records_round_trip(tmp_path):
     rec = MeasurementRecord(
         frame_index=3, t_emit_s=9.0, t_arrival_s=9.2, tof_s=0.2, range_m=300.0, v_r_mps=-1.25, snr_db=11.0,
         v_r_tone_eq9_mps=-1.2, v_r_bank_mps=-1.3, detection_z=500.0, detection_rho=0.6, sigma_range_m=0.002,
-        sigma_v_r_mps=6e-4, sigma_v_r_bank_mps=0.02, tone_c_n0_dbhz=50.0, two_way=True, payload_valid=None,
+        sigma_v_r_mps=6e-4, sigma_v_r_bank_mps=0.02, tone_c_n0_dbhz=50.0, two_way=True, crc_ok=None,
     )
+    decoded = dataclasses.replace(
+        rec, two_way=False, crc_ok=True, payload_hex="68692c2031", payload_text="hi, 1", eq_snr_db=12.5,
+        decode_passes=2, ber=0.0, raw_ber=0.0125,
+    )
+    failed = dataclasses.replace(decoded, crc_ok=False, payload_hex="", payload_text="", ber=0.25)
+
+    def same(a, b):  # NaN (not decoded) reads back as NaN
+        da, db = a.to_dict(), b.to_dict()
+        return da.keys() == db.keys() and all(
+            (isinstance(v, float) and math.isnan(v) and math.isnan(db[k])) or v == db[k] for k, v in da.items()
+        )
+
     for suffix in ("csv", "jsonl"):
         path = tmp_path / f"m.{suffix}"
-        write_measurements(path, [rec], {"sound_speed_mps": 1500.0})
+        write_measurements(path, [rec, decoded, failed], {"sound_speed_mps": 1500.0})
         back, header = read_measurements(path)
-        assert back == [rec] and header["sound_speed_mps"] == 1500.0
+        assert len(back) == 3 and header["sound_speed_mps"] == 1500.0
+        assert all(same(a, b) for a, b in zip(back, [rec, decoded, failed]))
+        assert back[0].crc_ok is None and back[1].crc_ok is True and back[2].crc_ok is False
 
 
 def test_two_way_ranging_from_the_command_line(tmp_path):

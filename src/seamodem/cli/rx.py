@@ -55,6 +55,19 @@ def add_parser(sub) -> None:
         metavar="RATE",
         help="detector design false-alarm rate in white noise (default 0.01 per hour)",
     )
+    p.add_argument(
+        "--no-decode",
+        dest="decode",
+        action="store_false",
+        help="measure only: skip equalising and decoding the payloads",
+    )
+    p.add_argument(
+        "--turbo-passes",
+        type=int,
+        default=3,
+        metavar="N",
+        help="most equaliser passes per frame; turbo passes run while the CRC fails (default 3; 1 = DFE only)",
+    )
     p.add_argument("--plot", metavar="DIR", help="write figures of the first --plot-frames frames to DIR")
     p.add_argument("--plot-frames", type=int, default=3, metavar="N", help="frames to plot (default 3)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
@@ -62,7 +75,12 @@ def add_parser(sub) -> None:
 
 
 def _sidecar_for(args) -> dict | None:
-    """The sidecar named by --config (if it is one), else the recording's own, else None."""
+    """The sidecar named by --config (if it is one), else the recording's own, else None.
+
+    A --config that is a preset or a plain configuration file still takes the
+    emission times, pilot and payloads from the recording's own sidecar when
+    one lies beside it.
+    """
     if args.config:
         path = Path(args.config)
         if path.suffix.lower() == ".json" and path.is_file():
@@ -72,7 +90,6 @@ def _sidecar_for(args) -> dict | None:
                 return None  # load_config reports it with the file name
             if isinstance(data, dict) and "format" in data:
                 return read_sidecar(path)
-        return None
     own = sidecar_path(args.recording)
     return read_sidecar(own) if own.is_file() and own != Path(args.recording) else None
 
@@ -109,6 +126,8 @@ def run(args: argparse.Namespace) -> int:
     sidecar = _sidecar_for(args)
     if sidecar is not None and not args.config:
         args.config = str(sidecar_path(args.recording))
+    if args.turbo_passes < 1:
+        raise SeamodemError(f"turbo-passes: must be >= 1, got {args.turbo_passes}")
     config = config_from_args(args)
     emissions = _emissions(args, sidecar, info.frames / info.samplerate)
     pilot = None
@@ -116,6 +135,12 @@ def run(args: argparse.Namespace) -> int:
         bits = np.array([int(ch) for ch in sidecar["pilot"]["bits"]])
         if bits.size == config.n_pilot:
             pilot = (1.0 - 2.0 * bits).astype(complex)
+    payloads = None
+    if sidecar is not None and args.decode and args.turnaround is None:
+        try:
+            payloads = [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
+        except (KeyError, TypeError, ValueError):
+            payloads = None  # an older or hand-made sidecar: decode without counting bit errors
     sound_speed = args.sound_speed
     if sound_speed is None:
         sound_speed = float((sidecar or {}).get("channel", {}).get("sound_speed_mps", DEFAULT_SOUND_SPEED_MPS))
@@ -133,6 +158,8 @@ def run(args: argparse.Namespace) -> int:
         "sound_speed_mps": sound_speed,
         "clock_offset_s": args.clock_offset,
         "turnaround_s": args.turnaround,
+        "decode": args.decode,
+        "turbo_passes": args.turbo_passes,
         "config": config.to_dict(),
     }
     with warnings.catch_warnings(record=True) as caught:
@@ -150,15 +177,44 @@ def run(args: argparse.Namespace) -> int:
             false_alarms_per_hour=args.false_alarms_per_hour,
             pilot=pilot,
             on_frame=on_frame,
+            decode=args.decode,
+            turbo_passes=args.turbo_passes,
+            payloads=payloads,
         )
         with atomic_outputs(out) as (tmp,):
-            n = write_measurements(tmp, records, header, kind=out.suffix.lower().lstrip("."))
+            counted = _Counted(records)
+            n = write_measurements(tmp, counted, header, kind=out.suffix.lower().lstrip("."))
     for w in caught:
         if issubclass(w.category, ReceiverWarning):
             print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
     if not args.quiet:
         print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {sound_speed:g} m/s)")
+        if args.decode and counted.decoded:
+            line = f"payloads: {counted.crc_ok} of {counted.decoded} decoded frames pass the CRC"
+            if counted.ber_frames:
+                line += f"; bit error rate {counted.ber_sum / counted.ber_frames:.2e} after decoding"
+            print(line)
     return 0
+
+
+class _Counted:
+    """Pass records through, counting decoded frames, CRC passes and bit errors."""
+
+    def __init__(self, records):
+        self.records = records
+        self.decoded = self.crc_ok = self.ber_frames = 0
+        self.ber_sum = 0.0
+
+    def __iter__(self):
+        for rec in self.records:
+            if rec.crc_ok is not None:
+                self.decoded += 1
+                self.crc_ok += int(rec.crc_ok)
+            if math.isfinite(rec.ber):
+                # every frame carries the same information block: the mean of the ber is the bit error rate
+                self.ber_frames += 1
+                self.ber_sum += rec.ber
+            yield rec
 
 
 def _plotter(args, config, pilot, sound_speed):

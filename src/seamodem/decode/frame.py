@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..config import FrameConfig
 from .equalizer import DfeSettings
 from .turbo import TurboResult, turbo_equalize
 
-__all__ = ["fractional_samples", "decode_frame"]
+__all__ = ["fractional_samples", "decode_frame", "decode_received", "FrameDecode", "RECEIVER_DFE", "channel_span_symbols", "dfe_for_span"]
 
 
 def fractional_samples(bb: np.ndarray, fs: float, t0_s: float, compensated, config: FrameConfig, sps: int = 2) -> np.ndarray:
@@ -54,9 +57,166 @@ def decode_frame(
     config: FrameConfig,
     pilot: np.ndarray,
     *,
-    settings: DfeSettings = DfeSettings(),
+    settings: DfeSettings | None = DfeSettings(),
     passes: int = 1,
 ) -> TurboResult:
-    """Equalise and decode a Doppler-compensated frame (passes = 1: DFE only; more: turbo)."""
-    x = fractional_samples(bb, fs, t0_s, compensated, config, settings.sps)
-    return turbo_equalize(x, np.asarray(pilot, dtype=complex), config, settings=settings, passes=passes)
+    """Equalise and decode a Doppler-compensated frame (passes = 1: DFE only; more: turbo).
+
+    ``settings=None`` sizes the equaliser to the frame's measured delay spread
+    (:func:`channel_span_symbols`, :func:`dfe_for_span`).
+    """
+    sps = DfeSettings().sps if settings is None else settings.sps
+    x = fractional_samples(bb, fs, t0_s, compensated, config, sps)
+    pilot = np.asarray(pilot, dtype=complex)
+    if settings is None:
+        settings = dfe_for_span(channel_span_symbols(x, pilot, sps))
+    return turbo_equalize(x, pilot, config, settings=settings, passes=passes)
+
+
+#: a long fixed equaliser: 20 symbols of feedforward span (4 before the cursor) and 24
+#: symbols of feedback, so that echoes up to 24 T = 3.75 ms (jmse2024) are cancelled
+RECEIVER_DFE = DfeSettings(n_ff=40, ff_centre=8, n_fb=24)
+
+
+def channel_span_symbols(x: np.ndarray, pilots: np.ndarray, sps: int, *, max_lag: int = 48, fraction: float = 0.15) -> int:
+    """Delay spread of the compensated frame, in whole symbols after the first arrival.
+
+    The pilots are correlated with the fractionally spaced samples at every
+    sample lag from 0 to ``max_lag`` symbols; the span is the last lag whose
+    correlation reaches ``fraction`` of the strongest and stands clear of the
+    noise (4× the median magnitude: a Rayleigh noise lag passes with
+    probability 2⁻¹⁶).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, complex
+        Doppler-compensated samples, ``sps`` per symbol, x[sps·k] at pilot k on
+        the first path.
+    pilots : numpy.ndarray
+    sps : int
+    """
+    p = np.asarray(pilots, dtype=complex)
+    lags = np.arange(sps * max_lag + 1)
+    idx = sps * np.arange(p.size)[None, :] + lags[:, None]
+    ok = idx < x.size
+    c = np.abs(np.where(ok, x[np.minimum(idx, x.size - 1)], 0) @ np.conj(p)) / p.size
+    strong = (c >= fraction * c.max()) & (c >= 4 * np.median(c))
+    return int(math.ceil(lags[strong].max() / sps - 1e-9)) if strong.any() else 0
+
+
+def dfe_for_span(span_symbols: int, *, base: DfeSettings = DfeSettings()) -> DfeSettings:
+    """Equaliser lengths sized to a measured delay spread of ``span_symbols`` symbols.
+
+    Every tap adapts and adds its share of misadjustment noise: on a single path
+    a 64-tap RLS DFE loses about 1 dB against the matched filter (measured raw
+    BER 9e-4 against 2.6e-4 at 6 dB in-band SNR, jmse2024). So the feedback
+    spans the delay spread D plus 3 symbols of pulse tail, and the feedforward
+    filter 4 + min(D, 12) symbols at ``base.sps`` samples per symbol, 8 samples
+    of them before the cursor (the first path). A single path (D ≤ 1) gets 4
+    symbols of feedforward and 2 feedback taps.
+
+    Parameters
+    ----------
+    span_symbols : int
+        Delay spread D in symbols (:func:`channel_span_symbols`).
+    base : DfeSettings
+        Algorithm, forgetting factor, step and PLL gains to keep.
+    """
+    import dataclasses
+
+    if span_symbols <= 1:
+        return dataclasses.replace(base, n_ff=4 * base.sps, ff_centre=2 * base.sps, n_fb=2)
+    return dataclasses.replace(
+        base, n_ff=base.sps * (4 + min(span_symbols, 12)) + 8, ff_centre=8, n_fb=span_symbols + 3
+    )
+
+
+@dataclass(frozen=True)
+class FrameDecode:
+    """A received frame's payload, and how well it came through.
+
+    Attributes
+    ----------
+    payload : bytes
+        Decoded payload; meaningful only when ``crc_ok``.
+    crc_ok : bool
+        The frame check passed. Bytes are never reported valid otherwise.
+    eq_snr_db : float
+        SNR at the DFE output, 1/mean|z − decision|² over the data [dB].
+    passes : int
+        Equaliser passes run (1 = DFE only; more: turbo passes until the CRC passed).
+    ber : float
+        Information-bit error rate after decoding (NaN when the payload sent is unknown).
+    raw_ber : float
+        Bit error rate of the DFE's hard decisions before the decoder (NaN when unknown).
+    compensated : CompensatedFrame
+        The eq 10–11 symbols the decoder started from (for plots).
+    """
+
+    payload: bytes
+    crc_ok: bool
+    eq_snr_db: float
+    passes: int
+    ber: float
+    raw_ber: float
+    compensated: object
+
+
+def decode_received(
+    bb: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    t_start_s: float,
+    v_mps: float,
+    sound_speed_mps: float,
+    settings: DfeSettings | None = None,
+    passes: int = 3,
+    sent_payload: bytes | None = None,
+) -> FrameDecode:
+    """Compensate (eq 10–11, constant ``v_mps``), equalise and decode one measured frame.
+
+    Parameters
+    ----------
+    bb : numpy.ndarray, complex
+        Data-band baseband around the frame, bb[n] at t0 + n/fs [s].
+    pilot : numpy.ndarray
+        Pilot symbols.
+    t_start_s, v_mps : float
+        The receiver's arrival time of the frame start [s] and mean closing speed [m/s].
+    settings : DfeSettings, optional
+        A fixed equaliser; default: sized to the frame's measured delay spread.
+    passes : int
+        Most equaliser passes; turbo passes run only while the CRC fails
+        (BPSK and QPSK; 8PSK frames get the DFE alone).
+    sent_payload : bytes, optional
+        The payload transmitted (from the sidecar), to count bit errors.
+    """
+    from ..receive.compensate import compensate_frame
+    from ..transmit.coding import encode_payload, info_block
+    from ..transmit.modulation import symbols_to_bits
+
+    comp = compensate_frame(
+        bb, fs, t0_s, config=config, pilot=pilot, t_start_s=t_start_s, sound_speed_mps=sound_speed_mps, v_mps=v_mps
+    )
+    if config.modulation not in ("bpsk", "qpsk"):
+        passes = 1
+    res = decode_frame(bb, fs, t0_s, comp, config, pilot, settings=settings, passes=passes)
+    ber = raw_ber = math.nan
+    if sent_payload is not None and len(sent_payload) <= config.capacity_bytes:
+        sent_info = info_block(sent_payload, config)
+        ber = float(np.mean(res.decoded.info_bits != sent_info))
+        sent_air = encode_payload(sent_payload, config)
+        hard = symbols_to_bits(res.dfe.decisions[config.n_pilot :], config.modulation)[: sent_air.size]
+        raw_ber = float(np.mean(hard != sent_air[: hard.size]))
+    return FrameDecode(
+        payload=res.decoded.payload if res.decoded.crc_ok else b"",
+        crc_ok=bool(res.decoded.crc_ok),
+        eq_snr_db=res.dfe.snr_db,
+        passes=res.passes,
+        ber=ber,
+        raw_ber=raw_ber,
+        compensated=comp,
+    )

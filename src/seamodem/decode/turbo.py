@@ -29,7 +29,7 @@ from ..transmit.coding import encode_info, interleaver_permutation, parse_info_b
 from ..transmit.modulation import bits_to_symbols
 from .bcjr import bcjr_decode
 from .demap import soft_demap
-from .equalizer import DfeSettings, dfe_equalize
+from .equalizer import DfeResult, DfeSettings, dfe_equalize
 from .payload import DecodedPayload, code_order_llr
 
 __all__ = ["TurboResult", "turbo_equalize", "estimate_channel"]
@@ -48,10 +48,13 @@ class TurboResult:
         Result of the last pass run.
     crc_by_pass : tuple of bool
         CRC outcome after each pass (pass 0 = DFE only); stops at the first success.
+    dfe : DfeResult
+        The pass-0 equaliser's outputs (soft symbols, PLL phase, output SNR).
     """
 
     decoded: DecodedPayload
     crc_by_pass: tuple[bool, ...]
+    dfe: DfeResult
 
     @property
     def passes(self) -> int:
@@ -142,7 +145,7 @@ def turbo_equalize(
     decoded, extrinsic = _decode(llr_air, config)
     history = [decoded.crc_ok]
     if decoded.crc_ok or passes == 1:
-        return TurboResult(decoded, tuple(history))
+        return TurboResult(decoded, tuple(history), dfe)
 
     centre = settings.ff_centre
     n_taps = channel_taps or settings.n_ff
@@ -180,4 +183,4 @@ def turbo_equalize(
         history.append(decoded.crc_ok)
         if decoded.crc_ok:
             break
-    return TurboResult(decoded, tuple(history))
+    return TurboResult(decoded, tuple(history), dfe)

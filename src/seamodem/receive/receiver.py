@@ -288,6 +288,21 @@ class Receiver:
         Called with (FrameMeasurement, bb, bb_t0_s, fs_bb) for every frame:
         the data baseband around it, its first sample's time [s] and its
         rate [Hz], e.g. to plot the frame or to compensate it.
+    decode : bool
+        Also equalise and decode each complete frame's payload (issue 5):
+        compensation at the tone's mean speed (eq 10–11), fractionally spaced
+        DFE with PLL, turbo passes while the CRC fails. Fills ``crc_ok``,
+        ``payload_hex``, ``payload_text``, ``eq_snr_db`` (and ``ber``,
+        ``raw_ber`` when ``payloads`` are given).
+    dfe_settings : DfeSettings, optional
+        A fixed equaliser; default: sized per frame to the delay spread of the
+        frame's delay spread measured on the pilots
+        (:func:`seamodem.decode.frame.channel_span_symbols`, :func:`~seamodem.decode.frame.dfe_for_span`).
+    turbo_passes : int
+        Most equaliser passes per frame (1: DFE only).
+    payloads : sequence of bytes, optional
+        The payload sent in each frame, by frame_index (from the sidecar), to
+        count bit errors.
 
     Examples
     --------
@@ -310,6 +325,10 @@ class Receiver:
         false_alarms_per_hour: float = 0.01,
         pilot: np.ndarray | None = None,
         on_frame=None,
+        decode: bool = False,
+        dfe_settings=None,
+        turbo_passes: int = 3,
+        payloads=None,
     ):
         for name, value in (("sound_speed", sound_speed_mps), ("v_max", v_max_mps)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -329,8 +348,38 @@ class Receiver:
         self.false_alarms_per_hour = float(false_alarms_per_hour)
         self.pilot = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else np.asarray(pilot, complex)
         self.on_frame = on_frame
+        if isinstance(turbo_passes, bool) or not isinstance(turbo_passes, int) or turbo_passes < 1:
+            raise ConfigError("turbo_passes", f"must be an integer >= 1, got {turbo_passes!r}")
+        self.decode = bool(decode)
+        self.dfe_settings = dfe_settings
+        self.turbo_passes = turbo_passes
+        self.payloads = None if payloads is None else list(payloads)
 
-    def _record(self, m: FrameMeasurement) -> MeasurementRecord:
+    def _decode(self, m: FrameMeasurement, bb: np.ndarray, t0_s: float, fs: float, frame_index: int):
+        """Payload of a measured frame (None when not decoding or the frame is cut)."""
+        if not self.decode or not m.complete:
+            return None
+        from ..decode.frame import decode_received
+
+        v = m.v_tone_ml_mps if math.isfinite(m.v_tone_ml_mps) else m.pilot.v_mps
+        sent = None
+        if self.payloads is not None and 0 <= frame_index < len(self.payloads):
+            sent = self.payloads[frame_index]
+        return decode_received(
+            bb,
+            fs,
+            t0_s,
+            config=self.config,
+            pilot=self.pilot,
+            t_start_s=m.pilot.t_start_s,
+            v_mps=v,
+            sound_speed_mps=self.sound_speed_mps,
+            settings=self.dfe_settings,
+            passes=self.turbo_passes,
+            sent_payload=sent,
+        )
+
+    def _record(self, m: FrameMeasurement, bb=None, t0_s=0.0, fs=0.0) -> MeasurementRecord:
         c = self.sound_speed_mps
         t_arr = m.pilot.t_start_s
         if self.turnaround_s is None:
@@ -359,6 +408,7 @@ class Receiver:
             sigma_v_r_bank_mps=float(pilot_velocity_crlb_mps(self.config, m.pilot.snr_db, sound_speed_mps=c)),
             tone_c_n0_dbhz=10 * math.log10(max(m.tone.c_n0_hz, 1e-30)),
             two_way=self.turnaround_s is not None,
+            **_payload_fields(self._decode(m, bb, t0_s, fs, int(k)) if bb is not None else None),
         )
 
     def run(self, blocks: Iterable[np.ndarray], *, fs: float) -> Iterator[MeasurementRecord]:
@@ -409,7 +459,7 @@ class Receiver:
                         )
                     if self.on_frame is not None:
                         self.on_frame(m, state.bb, state.bb_start / plan.fs_data, plan.fs_data)
-                    yield self._record(m)
+                    yield self._record(m, state.bb, state.bb_start / plan.fs_data, plan.fs_data)
                 else:
                     keep.append(d)
             pending = keep
@@ -427,6 +477,29 @@ class Receiver:
         found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=True)
         pending.extend(found)
         yield from ready(final=True)
+
+
+def _payload_fields(dec) -> dict:
+    """The record's payload columns from a FrameDecode (or their empty values)."""
+    if dec is None:
+        return {}
+    text = ""
+    if dec.crc_ok:
+        try:
+            text = dec.payload.decode("utf-8")
+        except UnicodeDecodeError:
+            text = ""
+        if not text.isprintable():
+            text = ""
+    return {
+        "crc_ok": dec.crc_ok,
+        "payload_hex": dec.payload.hex() if dec.crc_ok else "",
+        "payload_text": text,
+        "eq_snr_db": dec.eq_snr_db,
+        "decode_passes": dec.passes,
+        "ber": dec.ber,
+        "raw_ber": dec.raw_ber,
+    }
 
 
 class _Buffers:

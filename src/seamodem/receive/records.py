@@ -70,8 +70,26 @@ class MeasurementRecord:
         Measured tone C/N0 [dB-Hz].
     two_way : bool
         True when tof_s comes from a round trip (paper 004).
-    payload_valid : bool or None
-        CRC check of the payload; None until the frame is decoded (issue 5).
+    crc_ok : bool or None
+        The payload's CRC passed; None when the frame was not decoded (decoding
+        off, or the frame cut by the end of the recording).
+    payload_hex : str
+        Decoded payload bytes in hex; empty unless ``crc_ok``.
+    payload_text : str
+        The payload as UTF-8 text when ``crc_ok`` and printable; else empty.
+    eq_snr_db : float
+        SNR at the equaliser output [dB]; NaN when not decoded.
+    decode_passes : int
+        Equaliser passes run (1: DFE alone; more: turbo); 0 when not decoded.
+    ber : float
+        Information-bit error rate after decoding, against the payload sent
+        (sidecar); NaN when unknown or not decoded.
+    raw_ber : float
+        Bit error rate of the equaliser's hard decisions before the decoder; NaN
+        when unknown or not decoded.
+    source : str
+        The recording the frame was found in (batch decoding of several
+        files, :mod:`seamodem.batch`); empty for a single recording.
     """
 
     frame_index: int
@@ -90,13 +108,22 @@ class MeasurementRecord:
     sigma_v_r_bank_mps: float
     tone_c_n0_dbhz: float
     two_way: bool = False
-    payload_valid: bool | None = None
+    crc_ok: bool | None = None
+    payload_hex: str = ""
+    payload_text: str = ""
+    eq_snr_db: float = math.nan
+    decode_passes: int = 0
+    ber: float = math.nan
+    raw_ber: float = math.nan
+    source: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
 
 
 FIELDS = tuple(f.name for f in dataclasses.fields(MeasurementRecord))
+#: columns a file may lack (measured without decoding, or written before decoding existed)
+OPTIONAL_FIELDS = ("crc_ok", "payload_hex", "payload_text", "eq_snr_db", "decode_passes", "ber", "raw_ber", "source")
 _TYPES = {f.name: f.type for f in dataclasses.fields(MeasurementRecord)}
 
 
@@ -145,7 +172,7 @@ def write_measurements(
             writer.writeheader()
             for rec in records:
                 row = rec.to_dict()
-                row["payload_valid"] = "" if rec.payload_valid is None else int(rec.payload_valid)
+                row["crc_ok"] = "" if rec.crc_ok is None else int(rec.crc_ok)
                 row["two_way"] = int(rec.two_way)
                 writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()})
                 f.flush()
@@ -161,6 +188,8 @@ def write_measurements(
 
 def _parse(name: str, value):
     kind = _TYPES[name]
+    if kind == "str":
+        return "" if value is None else str(value)
     if value is None or value == "":
         return None if "None" in kind else math.nan
     if kind == "int":
@@ -202,8 +231,8 @@ def read_measurements(path: str | Path) -> tuple[list[MeasurementRecord], dict[s
         raise InputFileError(f"{path} is not a seamodem measurement file ({MEASUREMENT_FORMAT!r} expected)")
     records = []
     for i, row in enumerate(rows):
-        missing = [k for k in FIELDS if k not in row]
+        missing = [k for k in FIELDS if k not in row and k not in OPTIONAL_FIELDS]
         if missing:
             raise InputFileError(f"{path}: row {i + 1} lacks {', '.join(missing)}")
-        records.append(MeasurementRecord(**{k: _parse(k, row[k]) for k in FIELDS}))
+        records.append(MeasurementRecord(**{k: _parse(k, row[k]) for k in FIELDS if k in row}))
     return records, header
