@@ -18,7 +18,7 @@ from ..errors import SeamodemError
 __all__ = ["main", "COMMANDS"]
 
 #: Subcommand modules, in the order ``seamodem --help`` lists them.
-COMMANDS = ("tx", "channel", "rx", "plot", "config", "nav")
+COMMANDS = ("demo", "tx", "channel", "rx", "ber", "plot", "config", "nav")
 
 
 def _parser() -> argparse.ArgumentParser:
