@@ -119,3 +119,23 @@ def test_simulate_writes_table_csv(tmp_path, capsys, monkeypatch):
                                                           ("6.0", "proposed"), ("6.0", "rosb")]
     assert (tmp_path / "sim" / "fig7_top_view.png").exists() and (tmp_path / "sim" / "fig8_error.png").exists()
     assert "Table 4" in capsys.readouterr().out
+
+
+def test_track_smooth_improves_and_keeps_last_state(scenario):
+    d, _, _ = scenario
+    common = ["nav", "track", str(d / "meas.csv"), "--imu", str(d / "imu.csv"), "--beacon", "50,30",
+              "--start", "0,0", "--start-speed", "1", "--truth", str(d / "truth.csv"), "--r-from-records"]
+    assert main(common + ["-o", str(d / "f.csv")]) == 0
+    assert main(common + ["--smooth", "-o", str(d / "s.csv")]) == 0
+    f, s = (json.loads((d / name).read_text()) for name in ("f.json", "s.json"))
+    assert s["smoothed"] and not f["smoothed"]
+    assert s["mean_error_m"] < f["mean_error_m"]
+    last_f = (d / "f.csv").read_text().strip().splitlines()[-1]
+    last_s = (d / "s.csv").read_text().strip().splitlines()[-1]
+    assert last_f == last_s
+
+
+def test_simulate_rejects_bad_workers(tmp_path, capsys):
+    code = main(["nav", "simulate", "--workers", "0", "-q", "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "--workers" in err and len(err.splitlines()) == 1

@@ -42,6 +42,10 @@ def add_parser(sub) -> None:
                    help="set the filter's R for range and v_r to the emulated variances (default: eq 25's 12 and 0.2)")
     s.add_argument("--q", type=float, metavar="VAR",
                    help="filter process noise variance per state and step (default Δt⁸ = 1.5e-5, eq 25)")
+    s.add_argument("--error-of", choices=("estimate", "smoothed", "last-fix"), default="estimate",
+                   help="position the error is measured on: the filter's real-time estimate (paper 000, default), "
+                        "the RTS-smoothed track (post-processing), or the last frame's fix held until the next "
+                        "(the diagnostic of docs/navigation.md)")
     s.add_argument("--workers", type=int, help="threads (default: all cores)")
     s.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -70,6 +74,8 @@ def add_parser(sub) -> None:
     t.add_argument("--filter", choices=("proposed", "rosb"), default="proposed", help="with or without v_r")
     t.add_argument("--r-from-records", action="store_true",
                    help="use each record's range_std_m and v_r_std_mps as R (SNR-dependent) instead of eq 25")
+    t.add_argument("--smooth", action="store_true",
+                   help="post-process: Rauch-Tung-Striebel smoothing of the whole track (uses later frames too)")
     t.add_argument("--truth", metavar="TRUTH.csv", help="true track (t_s, x_m, y_m) for error statistics")
     t.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="track output; OUT.png beside it")
     t.set_defaults(run=run_track)
@@ -84,12 +90,17 @@ def run_simulate(args: argparse.Namespace) -> int:
         raise SeamodemError(f"output: {out} exists and is not a folder")
     if args.runs < 4:
         raise SeamodemError(f"--runs: must be >= 4 (quartiles for the outlier rule), got {args.runs}")
+    if args.workers is not None and args.workers < 1:
+        raise SeamodemError(f"--workers: must be >= 1, got {args.workers}")
+    if args.seed < 0:
+        raise SeamodemError(f"--seed: must be >= 0, got {args.seed}")
     noise = NoiseModel()
     if args.sigma_range is not None:
         noise = replace(noise, sigma_range_m=args.sigma_range)
     if args.sigma_vr is not None:
         noise = replace(noise, sigma_vr_mps=args.sigma_vr)
-    config = MissionConfig(noise=noise, steer_on_estimate=args.steer == "estimate", q=args.q)
+    config = MissionConfig(noise=noise, steer_on_estimate=args.steer == "estimate", q=args.q,
+                           error_of=args.error_of.replace("-", "_"))
     if args.matched_r:
         config = replace(config, r_diag=(noise.sigma_range_m**2, noise.sigma_vr_mps**2, *config.r_diag[2:]))
     for t in args.tcom:
@@ -129,6 +140,7 @@ def run_track(args: argparse.Namespace) -> int:
         depths=args.depth,
         filter=args.filter,
         r_from_records=args.r_from_records,
+        smooth=args.smooth,
         truth=args.truth,
         output=args.output,
     )

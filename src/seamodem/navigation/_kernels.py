@@ -20,7 +20,7 @@ NOISE_COLUMNS = ("heading", "omega", "accel", "heading_bias", "range", "v_r")
 
 @njit(cache=True, nogil=True)
 def _predict6(z, P, F, A, dt, q):
-    """z ← f(z) (eq 7), P ← F P Fᵀ + q·I (eq 21, 25), in place."""
+    """z ← f(z) (eq 7), P ← F P Fᵀ + diag(q) (eq 21, 25), in place."""
     x, y, psi, v, om, a = z[0], z[1], z[2], z[3], z[4], z[5]
     c, s = np.cos(psi), np.sin(psi)
     for i in range(6):
@@ -44,7 +44,7 @@ def _predict6(z, P, F, A, dt, q):
                 acc += A[i, k] * F[j, k]
             P[i, j] = acc
             P[j, i] = acc
-        P[i, i] += q
+        P[i, i] += q[i]
 
 
 @njit(cache=True, nogil=True)
@@ -83,7 +83,7 @@ def _wrap(angle):
 
 @njit(cache=True, nogil=True)
 def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt, q, com_every,
-                   use_vr, steer_on_estimate, v_min, v_max, omega_max, accel_max):
+                   use_vr, steer_on_estimate, v_min, v_max, omega_max, accel_max, history):
     """Run one mission of paper 000's simulation; return the position error and both tracks.
 
     Parameters
@@ -104,8 +104,8 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
     beacon : ndarray, shape (2,)
     dt : float
         Step [s].
-    q : float
-        Process noise variance per state and step (eq 25: Δt⁸).
+    q : ndarray, shape (6,)
+        Process noise variance of each state per step (eq 25: Δt⁸ for all).
     com_every : int
         A frame arrives every ``com_every`` steps (T_com / dt).
     use_vr : bool
@@ -116,6 +116,12 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
         Speed limits of the vehicle [m/s].
     omega_max, accel_max : float
         Actuator limits of the controller [rad/s, m/s²].
+    history : ndarray, shape (n + 1, 6, 20) or (0, 6, 20)
+        When not empty, filled with what a Rauch–Tung–Striebel smoother needs:
+        ``history[k, :, 0]`` prior state at step k, ``[:, 1]`` posterior state,
+        ``[:, 2:8]`` prior covariance, ``[:, 8:14]`` posterior covariance,
+        ``[:, 14:20]`` the transition Jacobian F from step k − 1 to k
+        (row i of each matrix in ``history[k, i]``). Step 0 has prior = posterior, F = I.
 
     Returns
     -------
@@ -137,6 +143,13 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
     z = np.array([x, y, psi, v, 0.0, 0.0])
     P = np.diag(p0_diag.copy())
     bias = 0.0
+    record = history.shape[0] > 0
+    if record:
+        for i in range(6):
+            history[0, i, 0] = history[0, i, 1] = z[i]
+            for j in range(6):
+                history[0, i, 2 + j] = history[0, i, 8 + j] = P[i, j]
+                history[0, i, 14 + j] = 1.0 if i == j else 0.0
     estimate[0, 0], estimate[0, 1] = z[0], z[1]
     truth[0, 0], truth[0, 1] = x, y
     error[0] = 0.0
@@ -149,6 +162,12 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
         x, y, psi, v = vehicle_step(x, y, psi, v, omega, accel, dt, v_min, v_max)
         accel_true = (v - v_old) / dt  # what the accelerometer feels, speed limits included
         _predict6(z, P, F, A, dt, q)
+        if record:
+            for i in range(6):
+                history[k, i, 0] = z[i]
+                for j in range(6):
+                    history[k, i, 2 + j] = P[i, j]
+                    history[k, i, 14 + j] = F[i, j]
         bias += sigmas[3] * noise[k, 3]
         rows = 0
         for i in range(5):
@@ -177,6 +196,11 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
         for i in range(3):
             r[rows + i] = r_diag[2 + i]
         _update_rows(z, P, innov, H, r, rows + 3, ph)
+        if record:
+            for i in range(6):
+                history[k, i, 1] = z[i]
+                for j in range(6):
+                    history[k, i, 8 + j] = P[i, j]
         estimate[k, 0], estimate[k, 1] = z[0], z[1]
         truth[k, 0], truth[k, 1] = x, y
         error[k] = np.sqrt((z[0] - x) ** 2 + (z[1] - y) ** 2)

@@ -107,6 +107,7 @@ class ExtendedKalmanFilter:
             raise ConfigError("Q", f"must be {n}×{n}, got shape {self._Q.shape}")
         self.t = float(t0_s)
         self.u = None
+        self.F = np.eye(n)
         self.last_nis = np.nan
 
     def _process_noise(self, dt: float) -> np.ndarray:
@@ -120,6 +121,7 @@ class ExtendedKalmanFilter:
         if u is not None:
             self.u = np.asarray(u, dtype=float)
         F = self.model.transition_jacobian(self.x, self.u, dt)
+        self.F = F  # the Jacobian of the last prediction (a smoother needs it)
         self.x = self.model.transition(self.x, self.u, dt)
         self.P = F @ self.P @ F.T + self._process_noise(dt)
         self.t = float(t_s)

@@ -23,6 +23,7 @@ from ..errors import ConfigError
 from ._kernels import NOISE_COLUMNS, mission_kernel
 from .ekf import ExtendedKalmanFilter
 from .models import Auv6Model, closing_speed
+from .smoother import rts_smooth
 from .trajectories import boustrophedon
 from .vehicle import feedback_command, vehicle_step
 
@@ -43,6 +44,9 @@ __all__ = [
 
 #: Filters of the reproduction: the paper's proposal (range + v_r) and the ROSB baseline (range only).
 FILTERS = ("proposed", "rosb")
+
+#: What the position error is measured on (:attr:`MissionConfig.error_of`).
+ERROR_OF = ("estimate", "smoothed", "last_fix")
 
 #: Paper 000 Tables 3 and 4: T_com → (mean error [m], outliers, variance [m²], %etd max, %etd mean,
 #: ROSB mean error [m], ROSB outliers).
@@ -123,8 +127,9 @@ class MissionConfig:
     r_diag : tuple
         Filter R for (d, v_r, ψ, Ω, a) — eq 25's diag(1, 0.005, 0.005, 12, 0.2)
         in eq 18's order.
-    q : float or None
-        Process noise variance per state and step; ``None`` means Δt⁸ (eq 25).
+    q : float, tuple of 6 floats, or None
+        Process noise variance per step: one value for every state, or one per
+        state (x, y, ψ, v, Ω, a); ``None`` means Δt⁸ for all (eq 25).
     p0_diag : tuple
         Initial covariance diagonal (not printed in paper 000; I₆ as in papers 002–003).
     steer_on_estimate : bool
@@ -138,6 +143,13 @@ class MissionConfig:
         near-constant-acceleration model (Q = Δt⁸) cannot follow.
     noise : NoiseModel
         Emulated measurement noise.
+    error_of : {"estimate", "smoothed", "last_fix"}
+        Which position the error is measured on: the filter's real-time estimate
+        (paper 000), the Rauch–Tung–Striebel smoothed track (post-processing,
+        :mod:`~seamodem.navigation.smoother`; the controller still steers on the
+        filter), or the filter's position at the last frame held until the next
+        one (a diagnostic: the error the paper's Table 3 is consistent with, see
+        docs/navigation.md).
     path : dict
         Keyword arguments of :func:`~seamodem.navigation.trajectories.boustrophedon`.
     """
@@ -154,6 +166,7 @@ class MissionConfig:
     omega_max_rad_s: float = 0.5
     accel_max_mps2: float = 0.5
     noise: NoiseModel = field(default_factory=NoiseModel)
+    error_of: str = "estimate"
     path: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -166,10 +179,24 @@ class MissionConfig:
             raise ConfigError("r_diag", f"must be 5 positive variances (d, v_r, ψ, Ω, a), got {self.r_diag!r}")
         if len(self.p0_diag) != 6 or min(self.p0_diag) <= 0:
             raise ConfigError("p0_diag", f"must be 6 positive variances, got {self.p0_diag!r}")
+        if self.q is not None:
+            q = np.atleast_1d(np.asarray(self.q, dtype=float))
+            if q.size not in (1, 6) or q.ndim != 1 or not np.all(np.isfinite(q)) or np.any(q < 0):
+                raise ConfigError("q", f"must be one or 6 finite variances >= 0, got {self.q!r}")
+        if self.error_of not in ERROR_OF:
+            raise ConfigError("error_of", f"must be one of {ERROR_OF}, got {self.error_of!r}")
 
     @property
     def process_variance(self) -> float:
-        return self.dt_s**8 if self.q is None else float(self.q)
+        """Process noise variance of the position states per step (all states when ``q`` is a scalar)."""
+        return float(self.process_diag[0])
+
+    @property
+    def process_diag(self) -> np.ndarray:
+        """Diagonal of the filter's Q per step, (x, y, ψ, v, Ω, a)."""
+        if self.q is None:
+            return np.full(6, self.dt_s**8)
+        return np.broadcast_to(np.asarray(self.q, dtype=float), (6,)).copy()
 
     @property
     def com_every(self) -> int:
@@ -195,12 +222,18 @@ def _start_state(reference: np.ndarray) -> np.ndarray:
 
 
 def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = "proposed", reference=None):
-    """One mission with the compiled kernel: (error (n+1,), estimate (n+1, 2), truth (n+1, 2)) [m]."""
+    """One mission with the compiled kernel: (error (n+1,), estimate (n+1, 2), truth (n+1, 2)) [m].
+
+    ``estimate`` is the position ``config.error_of`` names: the filter's, the
+    smoothed one, or the last frame's held until the next.
+    """
     if filter not in FILTERS:
         raise ConfigError("filter", f"must be one of {FILTERS}, got {filter!r}")
     if reference is None:
         reference, _ = config.reference()
-    return mission_kernel(
+    n = reference.shape[0] - 1
+    history = np.empty((n + 1 if config.error_of == "smoothed" else 0, 6, 20))
+    error, estimate, truth = mission_kernel(
         reference,
         noise,
         _start_state(reference),
@@ -209,7 +242,7 @@ def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = 
         np.asarray(config.p0_diag, dtype=float),
         np.asarray(config.beacon_xy, dtype=float),
         config.dt_s,
-        config.process_variance,
+        config.process_diag,
         config.com_every,
         filter == "proposed",
         config.steer_on_estimate,
@@ -217,7 +250,23 @@ def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = 
         config.v_max_mps,
         config.omega_max_rad_s,
         config.accel_max_mps2,
+        history,
     )
+    if config.error_of == "estimate":
+        return error, estimate, truth
+    if config.error_of == "smoothed":
+        smoothed, _ = rts_smooth(history[:, :, 1], history[:, :, 8:14], history[:, :, 0], history[:, :, 2:8],
+                                 history[:, :, 14:20])
+        estimate = np.ascontiguousarray(smoothed[:, :2])
+    else:
+        estimate = estimate[held_fix_index(n, config.com_every)]
+    return np.hypot(*(estimate - truth).T), estimate, truth
+
+
+def held_fix_index(n_steps: int, com_every: int) -> np.ndarray:
+    """Index of the last frame step at or before each step 0…n (step 0: the start fix)."""
+    k = np.arange(n_steps + 1)
+    return (k // com_every) * com_every
 
 
 def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filter: str = "proposed",
@@ -229,6 +278,8 @@ def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filt
     (x0, P0, Q, model) → object with ``predict(t_s)`` / ``update(z, kind, R)`` and
     ``x`` lets the benchmark plug in another EKF implementation.
     """
+    if config.error_of == "smoothed":
+        raise ConfigError("error_of", "'smoothed' is computed by simulate_mission only (the compiled kernel)")
     if reference is None:
         reference, _ = config.reference()
     n = reference.shape[0] - 1
@@ -238,7 +289,7 @@ def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filt
     x, y, psi, v = _start_state(reference)
     x0 = np.array([x, y, psi, v, 0.0, 0.0])
     P0 = np.diag(config.p0_diag)
-    Q = config.process_variance * np.eye(6)
+    Q = np.diag(config.process_diag)
     factory = filter_factory or (lambda x0, P0, Q, model: ExtendedKalmanFilter(model, x0, P0, Q))
     ekf = factory(x0, P0, Q, model)
     r = dict(zip(("range", "v_r", "psi", "omega", "a"), config.r_diag))
@@ -269,6 +320,9 @@ def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filt
         estimate[k], truth[k] = ekf.x[:2], (x, y)
         error[k] = math.hypot(*(estimate[k] - truth[k]))
         omega, accel = command(k)
+    if config.error_of == "last_fix":
+        estimate = estimate[held_fix_index(n, config.com_every)]
+        error = np.hypot(*(estimate - truth).T)
     return error, estimate, truth
 
 
@@ -337,8 +391,38 @@ def _run_chunk(config, reference, filter, seed, runs):
     return stats, curves, track_sum, truth
 
 
+def _chunk_results(tasks, configs, reference, seed, workers, progress, backend, scheduler):
+    """(T_com, filter, chunk output) in task order: on local threads, or with seamodem.batch."""
+    if backend is None:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            futures = [(t, f, pool.submit(_run_chunk, configs[t], reference, f, seed, r)) for t, f, r in tasks]
+            for t, f, fut in futures:
+                out = fut.result()
+                if progress is not None:
+                    progress(len(out[0]))
+                yield t, f, out
+        return
+    from ..batch.runner import map_tasks
+
+    outputs = map_tasks(
+        _run_chunk_task,
+        [(configs[t], reference, f, seed, r) for t, f, r in tasks],
+        backend=backend,
+        workers=workers,
+        scheduler=scheduler,
+        on_result=None if progress is None else (lambda res: progress(len(res.value[0])) if res.ok else None),
+    )
+    for (t, f, _), out in zip(tasks, outputs):
+        yield t, f, out
+
+
+def _run_chunk_task(args):
+    return _run_chunk(*args)
+
+
 def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs: int = 300, seed: int = 0,
-                    filters=FILTERS, workers: int | None = None, progress=None) -> MonteCarloResult:
+                    filters=FILTERS, workers: int | None = None, progress=None, backend: str | None = None,
+                    scheduler=None) -> MonteCarloResult:
     """Reproduce paper 000 Tables 3–4: every (T_com, filter) pair over ``runs`` seeded missions.
 
     Parameters
@@ -350,9 +434,15 @@ def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs:
     seed : int
         Run ``r`` draws its noise from ``default_rng([seed, r])``.
     workers : int, optional
-        Threads (default: all local cores).
+        Threads, or processes with ``backend`` (default: all local cores).
     progress : callable, optional
         Called with the number of runs finished, after each chunk.
+    backend : {"serial", "processes", "dask"}, optional
+        Run the chunks with :func:`seamodem.batch.run_tasks` instead of local
+        threads: this process, local processes, or a Dask cluster
+        (``scheduler``: address or client); the same numbers on every backend.
+    scheduler : str or distributed.Client, optional
+        Dask scheduler, with ``backend="dask"``.
     """
     import time
 
@@ -367,15 +457,11 @@ def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs:
     chunk = max(1, min(25, runs // workers))
     tasks = [(t, f, range(a, min(a + chunk, runs))) for t in configs for f in filters for a in range(0, runs, chunk)]
     start = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = [(t, f, pool.submit(_run_chunk, configs[t], reference, f, seed, r)) for t, f, r in tasks]
-        parts: dict = {}
-        truth = None
-        for t, f, fut in futures:
-            stats, curves, tracks, truth = fut.result()
-            parts.setdefault((t, f), []).append((stats, curves, tracks))
-            if progress is not None:
-                progress(len(stats))
+    parts: dict = {}
+    truth = None
+    for t, f, (stats, curves, tracks, truth) in _chunk_results(tasks, configs, reference, seed, workers, progress,
+                                                               backend, scheduler):
+        parts.setdefault((t, f), []).append((stats, curves, tracks))
     wall = time.perf_counter() - start
     rows, curves_out, tracks_out, per_run = [], {}, {}, {}
     for (t, f), pieces in parts.items():
@@ -391,6 +477,13 @@ def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs:
                             curves_out, tracks_out, per_run, wall)
 
 
+def _q_text(config: MissionConfig) -> str:
+    q = config.process_diag
+    if np.all(q == q[0]):
+        return f"{q[0]:.3g} I6"
+    return "diag(" + ", ".join(f"{v:.3g}" for v in q) + ")"
+
+
 def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
     """Tables 3 and 4 in the paper's layout, with the paper's values beside ours when ``paper``."""
     by = {(r["tcom_s"], r["filter"]): r for r in result.rows}
@@ -401,7 +494,8 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
         f"noise: range {noise.sigma_range_m:.3g} m, v_r {noise.sigma_vr_mps:.3g} m/s, heading "
         f"{noise.sigma_heading_deg:.3g} deg + {noise.heading_drift_deg_per_h:.3g} deg/h random walk, gyro "
         f"{noise.sigma_omega_rad_s:.3g} rad/s, accel {noise.sigma_accel_mps2:.3g} m/s^2; "
-        f"filter R = {result.config.r_diag} (d, v_r, psi, omega, a), Q = {result.config.process_variance:.3g} I6",
+        f"filter R = {result.config.r_diag} (d, v_r, psi, omega, a), Q = {_q_text(result.config)}; "
+        f"error of the {result.config.error_of.replace('_', ' ')}",
         "",
         "Table 3 (proposed filter)",
         f"{'T_com':>6} | {'mean error (outliers) m':>24} | {'variance m2':>11} | {'%etd max':>8} | {'%etd mean':>9}"

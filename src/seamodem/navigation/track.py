@@ -22,6 +22,7 @@ from ..io.files import atomic_outputs, check_writable
 from .ekf import ExtendedKalmanFilter
 from .geometry import geodetic_to_local, local_to_geodetic, slant_to_horizontal
 from .models import Auv6Model
+from .smoother import rts_smooth
 
 __all__ = ["MEASUREMENT_COLUMNS", "IMU_COLUMNS", "read_columns", "run_track", "track_from_files"]
 
@@ -94,7 +95,7 @@ def _pair(text, parameter):
 
 
 def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0, filter="proposed",
-              r_from_records=False, depths=None) -> dict:
+              r_from_records=False, depths=None, smooth=False) -> dict:
     """6-state EKF (paper 000) over IMU samples and acoustic records, each fused at its own time.
 
     Parameters
@@ -112,6 +113,10 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
         instead of eq 25's fixed 12 m² and 0.2 m²/s².
     depths : (float, float), optional
         Vehicle and beacon depths [m]: slant ranges become horizontal (paper 004 eq 10).
+    smooth : bool
+        Replace the filtered states by the Rauch–Tung–Striebel smoothed ones
+        (:func:`~seamodem.navigation.smoother.rts_smooth`): each state then uses
+        the frames after it as well (post-processing, not real time).
 
     Returns
     -------
@@ -133,9 +138,14 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
     order = order[times[order] >= ekf.t]
     R_ahrs = [EQ25_R["psi"], EQ25_R["omega"], EQ25_R["a"]]
     t_out, states, covs = [], [], []
+    priors, prior_covs, jacobians = [], [], []
     for e in order:
         t, i = times[e], rows[e]
         ekf.predict(t)
+        if smooth:
+            priors.append(ekf.state)
+            prior_covs.append(ekf.covariance)
+            jacobians.append(ekf.F.copy())
         if kinds[e] == 0:
             ekf.update([imu["heading_rad"][i], imu["omega_rad_s"][i], imu["accel_mps2"][i]], "ahrs", R_ahrs)
         else:
@@ -147,11 +157,15 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
         t_out.append(t)
         states.append(ekf.state)
         covs.append(ekf.covariance)
+    if smooth and states:
+        state, cov = rts_smooth(np.array(states), np.array(covs), np.array(priors), np.array(prior_covs),
+                                np.array(jacobians))
+        return {"t_s": np.array(t_out), "state": state, "cov": cov}
     return {"t_s": np.array(t_out), "state": np.array(states), "cov": np.array(covs)}
 
 
 def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, geodetic=False, depths=None,
-                     filter="proposed", r_from_records=False, truth=None, output) -> str:
+                     filter="proposed", r_from_records=False, smooth=False, truth=None, output) -> str:
     """Read, track, write OUT.csv, OUT.png (and OUT.json with --truth); return a one-paragraph summary."""
     out = check_writable(output)
     if out.suffix.lower() != ".csv":
@@ -169,7 +183,7 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
     samples = read_columns(imu, IMU_COLUMNS, time_column="t_s", what="IMU file")
     truth_cols = read_columns(truth, TRUTH_COLUMNS, time_column="t_s", what="truth file") if truth else None
     result = run_track(meas, samples, beacon_xy=beacon_xy, start_xy=start_xy, start_speed_mps=start_speed_mps,
-                       filter=filter, r_from_records=r_from_records, depths=depths)
+                       filter=filter, r_from_records=r_from_records, depths=depths, smooth=smooth)
     t, state, cov = result["t_s"], result["state"], result["cov"]
     columns = {"t_s": t, "x_m": state[:, 0], "y_m": state[:, 1], "heading_rad": state[:, 2],
                "speed_mps": state[:, 3], "var_x_m2": cov[:, 0, 0], "cov_xy_m2": cov[:, 0, 1], "var_y_m2": cov[:, 1, 1]}
@@ -194,9 +208,9 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
             writer.writerow(columns)
             writer.writerows(zip(*(np.round(v, 9) for v in columns.values())))
         plot_track(t, state[:, :2], temps[1], beacon_xy=beacon_xy, sigma_xy=np.sqrt(np.c_[cov[:, 0, 0], cov[:, 1, 1]]),
-                   truth_xy=truth_xy, title=f"{filter}: {meas['range_m'].size} frames, {samples['t_s'].size} IMU samples")
+                   truth_xy=truth_xy, title=f"{filter}{' (RTS-smoothed)' if smooth else ''}: {meas['range_m'].size} frames, {samples['t_s'].size} IMU samples")
         if stats:
-            Path(temps[2]).write_text(json.dumps({"filter": filter, **stats}, indent=1) + "\n", encoding="utf-8")
+            Path(temps[2]).write_text(json.dumps({"filter": filter, "smoothed": bool(smooth), **stats}, indent=1) + "\n", encoding="utf-8")
     text = f"wrote {out} ({t.size} states) and {out.with_suffix('.png')}"
     if stats:
         text += (f"; error vs truth: mean {stats['mean_error_m']:.2f} m, RMS {stats['rms_error_m']:.2f} m, "
