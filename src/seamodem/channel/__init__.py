@@ -6,7 +6,8 @@ Modules follow the physics: ``propagation`` (sound speed, absorption, losses),
 gains with a Doppler spread), ``noise``, ``resample`` (the band-limited
 interpolation kernel), ``truth`` (ground truth per frame), ``scenario`` (TOML
 files), ``simulate`` (the block-wise pipeline) and ``replay`` (measured
-channels in the uwa-channels format).
+channels in the uwa-channels format), ``two_way`` (poll/reply exchanges for
+two-way ranging).
 """
 
 from .fluctuation import GaussianDopplerProcess
@@ -33,12 +34,14 @@ from .scenario import (
     Noise,
     Replay,
     Scenario,
+    TwoWay,
     Vehicle,
     load_scenario,
     parse_scenario,
 )
 from .simulate import SimulationResult, make_noise_source, simulate, simulate_file
 from .truth import arrival_times, frame_truth, in_band_power
+from .two_way import ReplySchedule, RetimedInput, reply_schedule, two_way_truth
 
 __all__ = [
     "GaussianDopplerProcess",
@@ -86,6 +89,7 @@ __all__ = [
     "Noise",
     "Replay",
     "Scenario",
+    "TwoWay",
     "Vehicle",
     "load_scenario",
     "parse_scenario",
@@ -96,4 +100,8 @@ __all__ = [
     "arrival_times",
     "frame_truth",
     "in_band_power",
+    "ReplySchedule",
+    "RetimedInput",
+    "reply_schedule",
+    "two_way_truth",
 ]

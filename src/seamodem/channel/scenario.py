@@ -16,10 +16,14 @@ Three modes:
 - ``replay``: a measured channel file ([replay], the uwa-channels format).
 
 [fluctuation], [noise] and [clock] apply to the first two modes; [noise] to all.
+[two_way] (geometry and profile modes) turns the recording into two-way
+ranging exchanges: the vehicle polls, the beacon's frames are its replies
+(:mod:`seamodem.channel.two_way`).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import tomllib
 from dataclasses import dataclass, field, fields
@@ -42,6 +46,7 @@ __all__ = [
     "Noise",
     "Clock",
     "Replay",
+    "TwoWay",
     "Scenario",
     "load_scenario",
     "parse_scenario",
@@ -439,7 +444,55 @@ class Replay(_Section):
         object.__setattr__(self, "start_s", value)
 
 
-_SECTIONS = {cls.SECTION: cls for cls in (Environment, Beacon, Vehicle, Doppler, Multipath, Fluctuation, Noise, Clock, Replay)}
+@dataclass(frozen=True, kw_only=True)
+class TwoWay(_Section):
+    """[two_way]: two-way travel-time ranging exchanges (paper 004 §III.B).
+
+    The vehicle emits poll k at ``poll_times_s[k]`` — or at ``first_poll_s`` +
+    k·``poll_period_s`` — on its own clock (the [clock] of the scenario); the
+    beacon hears it and, ``turnaround_s`` later on its clock, emits frame k of
+    the input recording as its reply. One poll per input frame.
+    """
+
+    SECTION = "two_way"
+    turnaround_s: float | None = None
+    poll_period_s: float | None = None
+    first_poll_s: float = 0.0
+    poll_times_s: tuple | None = None
+
+    def __post_init__(self):
+        if self.turnaround_s is None:
+            raise ConfigError(self._name("turnaround_s"), "is required: the beacon's delay from hearing a poll to its reply [s]")
+        turnaround = _number(self._name("turnaround_s"), self.turnaround_s)
+        if turnaround < 0:
+            raise ConfigError(self._name("turnaround_s"), f"must be >= 0, got {turnaround!r}")
+        object.__setattr__(self, "turnaround_s", turnaround)
+        object.__setattr__(self, "first_poll_s", _number(self._name("first_poll_s"), self.first_poll_s))
+        if (self.poll_period_s is None) == (self.poll_times_s is None):
+            raise ConfigError(self._name("poll_period_s"), "give exactly one of poll_period_s and poll_times_s")
+        if self.poll_period_s is not None:
+            period = _number(self._name("poll_period_s"), self.poll_period_s)
+            _positive(self._name("poll_period_s"), period)
+            object.__setattr__(self, "poll_period_s", period)
+        else:
+            if not isinstance(self.poll_times_s, (list, tuple)) or not self.poll_times_s:
+                raise ConfigError(self._name("poll_times_s"), f"must be a non-empty list of times [s], got {self.poll_times_s!r}")
+            times = tuple(_number(self._name("poll_times_s"), t) for t in self.poll_times_s)
+            if any(b <= a for a, b in itertools.pairwise(times)):
+                raise ConfigError(self._name("poll_times_s"), "must be increasing")
+            object.__setattr__(self, "poll_times_s", times)
+
+    def poll_times(self, count: int) -> np.ndarray:
+        """Emission times of the ``count`` polls on the vehicle's clock [s]."""
+        if self.poll_times_s is not None:
+            if len(self.poll_times_s) != count:
+                raise ConfigError(self._name("poll_times_s"),
+                                  f"lists {len(self.poll_times_s)} polls but the input recording has {count} frames (one reply each)")
+            return np.array(self.poll_times_s, dtype=float)
+        return self.first_poll_s + self.poll_period_s * np.arange(count)
+
+
+_SECTIONS = {cls.SECTION: cls for cls in (Environment, Beacon, Vehicle, Doppler, Multipath, Fluctuation, Noise, Clock, Replay, TwoWay)}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -462,6 +515,7 @@ class Scenario:
     noise: Noise = field(default_factory=Noise)
     clock: Clock = field(default_factory=Clock)
     replay: Replay | None = None
+    two_way: TwoWay | None = None
     base_dir: Path = field(default=Path("."), compare=False)
 
     def __post_init__(self):
@@ -483,6 +537,8 @@ class Scenario:
         if self.mode == "replay" and (self.clock != Clock() or self.fluctuation.doppler_spread_hz > 0):
             raise ConfigError("clock" if self.clock != Clock() else "fluctuation",
                               "does not apply in replay mode (the measured channel carries its own)")
+        if self.mode == "replay" and self.two_way is not None:
+            raise ConfigError("two_way", "does not apply in replay mode (a measured channel has no known delay)")
 
     def _check_geometry(self) -> None:
         env = self.environment

@@ -44,6 +44,7 @@ from .noise import AlphaStableNoise, AmbientNoise, GaussianMixtureNoise, NoiseSo
 from .resample import HILBERT_LOW_FRACTION, PASSBAND_FRACTION, input_span, render_paths
 from .scenario import Scenario
 from .truth import frame_truth, in_band_power
+from .two_way import RetimedInput, reply_schedule, two_way_truth
 
 __all__ = ["SimulationResult", "simulate", "simulate_file", "make_noise_source"]
 
@@ -224,6 +225,15 @@ def _run(
         raise ConfigError("band_hz", f"signal band reaches {top:g} Hz, above the interpolator's accurate band "
                                      f"{PASSBAND_FRACTION:g}·fs = {PASSBAND_FRACTION * fs:g} Hz")
     model = build_model(scenario, reference_frequency_hz=reference_frequency_hz)
+    exchanges = None
+    if scenario.two_way is not None:  # the input's frames become replies to the vehicle's polls
+        if not len(t_emit_s):
+            raise ConfigError("two_way", "needs the input's frames (emission times in its sidecar) to send as replies")
+        polls = scenario.two_way.poll_times(len(t_emit_s))
+        exchanges = reply_schedule(model, polls, turnaround_s=scenario.two_way.turnaround_s,
+                                   frame_duration_s=frame_duration_s)
+        source = RetimedInput(source, fs, t_emit_s, exchanges.t_reply_emit_s, frame_duration_s)
+        t_emit_s = list(exchanges.t_reply_emit_s)
     seeds = np.random.SeedSequence(scenario.seed).spawn(2)
     t_start = float(model.clock.to_true(0.0))
     t_end = model.end_time(source.n / fs, fs)
@@ -234,6 +244,8 @@ def _run(
         raise ConfigError("band_hz", f"path fluctuations need the signal above {HILBERT_LOW_FRACTION:g}·fs "
                                      f"= {HILBERT_LOW_FRACTION * fs:g} Hz (Hilbert interpolator), got {min(band_hz):g} Hz")
     truth = frame_truth(model, t_emit_s, frame_duration_s) if len(t_emit_s) else []
+    if exchanges is not None:
+        two_way_truth(truth, exchanges, model.c)
     scratch = make_scratch(n_out)
     _render(model, source, fs, n_out, scratch, progress)
 
@@ -256,6 +268,7 @@ def _run(
             "input_n_samples": source.n,
             "length_rule": "input duration + largest path delay at the end + interpolator half-length, on the receiver clock",
         },
+        **({"two_way": exchanges.to_dict()} if exchanges is not None else {}),
         "truth_columns": (
             "t_arrival_s, tof_s = t_arrival_s - t_emit_s, range_m = c*tof_s, v_r_mps: what an ideal receiver measures "
             "on its own clock (clock errors included); *_true: physical values (direct path, SPEC §1)"
@@ -359,6 +372,18 @@ def _rescale_wav(path: Path, gain: float, fs: int, block: int = 1 << 20) -> None
             os.unlink(tmp)
 
 
+def _frames_as_polls(side: dict, two_way: dict) -> None:
+    """Two-way: each frame's ``t_emit_s`` becomes its poll's (vehicle clock), what ``rx --turnaround`` pairs it with.
+
+    The input's emission time is kept as ``t_emit_input_s`` and the beacon's
+    reply emission (true time) as ``t_reply_emit_s``.
+    """
+    for frame, t_poll, t_reply in zip(side["frames"], two_way["t_poll_s"], two_way["t_reply_emit_s"]):
+        frame["t_emit_input_s"] = frame["t_emit_s"]
+        frame["t_emit_s"] = t_poll
+        frame["t_reply_emit_s"] = t_reply
+
+
 def write_outputs(in_wav: str | Path, out_wav: str | Path, side_in: dict, produce, *, command: str) -> dict[str, Any]:
     """Run ``produce(fin, sink, make_scratch) -> (truth, channel)`` and write OUT.wav + OUT.json atomically.
 
@@ -401,6 +426,8 @@ def write_outputs(in_wav: str | Path, out_wav: str | Path, side_in: dict, produc
         channel["command"] = command
         channel["input"] = in_wav.name
         channel["input_recording"] = rec
+        if "two_way" in channel:
+            _frames_as_polls(side, channel["two_way"])
         side["channel"] = channel
         side["truth"] = truth
         side["recording"] = {

@@ -17,7 +17,8 @@ def add_parser(sub) -> None:
             "Read IN.wav and its sidecar IN.json, apply the scenario (TOML; see docs/channel.md and "
             "examples/scenarios/), write OUT.wav and OUT.json: the input sidecar carried forward, a "
             "'channel' section (scenario as used, seed, paths, noise) and a 'truth' list per frame "
-            "(true arrival, tof, range, mean v_r; SPEC §1)."
+            "(true arrival, tof, range, mean v_r; SPEC §1). With a [two_way] table the input's frames are "
+            "the beacon's replies to the vehicle's polls (two-way ranging; see docs/channel.md)."
         ),
     )
     p.add_argument("input", metavar="IN.wav", help="transmitted recording with its sidecar IN.json beside it")
@@ -54,4 +55,7 @@ def run(args: argparse.Namespace) -> int:
             f"wrote {out} ({ch['output']['duration_s']:.2f} s, {len(ch['paths'])} paths, noise {ch['noise']['kind']}) "
             f"and {out.with_suffix('.json')} with the truth of {len(side['truth'])} frames"
         )
+        if "two_way" in ch:
+            print(f"two-way: {len(side['truth'])} polls answered after {ch['two_way']['turnaround_s']:g} s; "
+                  f"the frames' t_emit_s are the polls (seamodem rx --turnaround {ch['two_way']['turnaround_s']:g})")
     return 0
