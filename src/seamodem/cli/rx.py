@@ -135,8 +135,14 @@ def run(args: argparse.Namespace) -> int:
         bits = np.array([int(ch) for ch in sidecar["pilot"]["bits"]])
         if bits.size == config.n_pilot:
             pilot = (1.0 - 2.0 * bits).astype(complex)
+    two_way = ((sidecar or {}).get("channel") or {}).get("two_way")
+    if two_way and args.turnaround is None and args.emit_start is None:
+        # a two-way exchange (seamodem channel with [two_way]): its frames' t_emit_s are the polls
+        args.turnaround = float(two_way["turnaround_s"])
+        if not args.quiet:
+            print(f"two-way recording: turnaround {args.turnaround:g} s from its sidecar")
     payloads = None
-    if sidecar is not None and args.decode and args.turnaround is None:
+    if sidecar is not None and args.decode:
         try:
             payloads = [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
         except (KeyError, TypeError, ValueError):
