@@ -179,6 +179,8 @@ def decode_received(
     settings: DfeSettings | None = None,
     passes: int = 3,
     sent_payload: bytes | None = None,
+    track_t_s: np.ndarray | None = None,
+    track_v_mps: np.ndarray | None = None,
 ) -> FrameDecode:
     """Compensate (eq 10–11, constant ``v_mps``), equalise and decode one measured frame.
 
@@ -197,14 +199,29 @@ def decode_received(
         (BPSK and QPSK; 8PSK frames get the DFE alone).
     sent_payload : bytes, optional
         The payload transmitted (from the sidecar), to count bit errors.
+    track_t_s, track_v_mps : numpy.ndarray, optional
+        The eq 9 speed track over the frame: when given, compensation follows
+        its least-squares line through ``v_mps`` (the frame's acceleration),
+        not the constant ``v_mps``.
     """
     from ..receive.compensate import compensate_frame
     from ..transmit.coding import encode_payload, info_block
     from ..transmit.modulation import symbols_to_bits
 
-    comp = compensate_frame(
-        bb, fs, t0_s, config=config, pilot=pilot, t_start_s=t_start_s, sound_speed_mps=sound_speed_mps, v_mps=v_mps
-    )
+    if track_t_s is not None and len(track_t_s) >= 8:
+        # the eq 9 track smoothed to a straight line (constant acceleration over the frame),
+        # through the mean speed v_mps: eq 10–11 driven by it
+        t = np.asarray(track_t_s, dtype=float)
+        slope = float(np.polyfit(t - t.mean(), np.asarray(track_v_mps, dtype=float), 1)[0])
+        grid = t_start_s + np.linspace(0.0, config.frame_duration_s, 16)
+        comp = compensate_frame(
+            bb, fs, t0_s, config=config, pilot=pilot, t_start_s=t_start_s, sound_speed_mps=sound_speed_mps,
+            track_t_s=grid, track_v_mps=v_mps + slope * (grid - t.mean()),
+        )
+    else:
+        comp = compensate_frame(
+            bb, fs, t0_s, config=config, pilot=pilot, t_start_s=t_start_s, sound_speed_mps=sound_speed_mps, v_mps=v_mps
+        )
     if config.modulation not in ("bpsk", "qpsk"):
         passes = 1
     res = decode_frame(bb, fs, t0_s, comp, config, pilot, settings=settings, passes=passes)

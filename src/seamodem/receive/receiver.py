@@ -304,6 +304,12 @@ class Receiver:
     payloads : sequence of bytes, optional
         The payload sent in each frame, by frame_index (from the sidecar), to
         count bit errors.
+    follow_track : bool
+        Compensation (eq 10–11) follows the eq 9 speed track smoothed to its
+        least-squares line through the ML mean speed (the frame's
+        acceleration); False: the constant mean speed. At ±0.2 m/s² both give
+        the same raw BER (measured, 20 frames at 6 and 15 dB): the PLL absorbs
+        the 0.26 rad of quadratic phase a constant speed leaves.
 
     Examples
     --------
@@ -330,6 +336,7 @@ class Receiver:
         dfe_settings=None,
         turbo_passes: int = 3,
         payloads=None,
+        follow_track: bool = True,
     ):
         for name, value in (("sound_speed", sound_speed_mps), ("v_max", v_max_mps)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -354,6 +361,7 @@ class Receiver:
         self.decode = bool(decode)
         self.dfe_settings = dfe_settings
         self.turbo_passes = turbo_passes
+        self.follow_track = bool(follow_track)
         self.payloads = None if payloads is None else list(payloads)
 
     def _decode(self, m: FrameMeasurement, bb: np.ndarray, t0_s: float, fs: float, frame_index: int):
@@ -378,6 +386,8 @@ class Receiver:
             settings=self.dfe_settings,
             passes=self.turbo_passes,
             sent_payload=sent,
+            track_t_s=m.track_t_s if self.follow_track else None,
+            track_v_mps=m.track_v_mps if self.follow_track else None,
         )
 
     def _record(self, m: FrameMeasurement, bb=None, t0_s=0.0, fs=0.0) -> MeasurementRecord:
