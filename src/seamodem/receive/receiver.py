@@ -189,7 +189,6 @@ def measure_frame(
             paths=paths,
             eps=fit.v_mps / c,
             search=doppler_bin_spacing_hz(config) / config.carrier_hz,
-            es_n0=fit.es_n0,
         )
         fit = dataclasses.replace(fit, t_start_s=paths.first_s, v_mps=eps * c)
     scale = 1 + fit.v_mps / c
