@@ -139,3 +139,16 @@ def test_simulate_rejects_bad_workers(tmp_path, capsys):
     code = main(["nav", "simulate", "--workers", "0", "-q", "-o", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "--workers" in err and len(err.splitlines()) == 1
+
+
+def test_r_from_records_reads_the_receivers_sigma_columns(scenario):
+    """seamodem rx names the per-frame deviations sigma_range_m and sigma_v_r_mps: same track as *_std names."""
+    d, _, _ = scenario
+    text = (d / "meas.csv").read_text()
+    assert "range_std_m" in text
+    (d / "meas_rx.csv").write_text(text.replace("range_std_m", "sigma_range_m").replace("v_r_std_mps", "sigma_v_r_mps"))
+    common = ["--imu", str(d / "imu.csv"), "--beacon", "50,30", "--start", "0,0", "--start-speed", "1",
+              "--r-from-records"]
+    assert main(["nav", "track", str(d / "meas.csv"), *common, "-o", str(d / "a.csv")]) == 0
+    assert main(["nav", "track", str(d / "meas_rx.csv"), *common, "-o", str(d / "b.csv")]) == 0
+    assert (d / "a.csv").read_text() == (d / "b.csv").read_text()

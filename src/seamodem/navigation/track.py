@@ -2,7 +2,7 @@
 
 The measurement CSV is read by column name (SPEC §4 record: ``frame_index,
 t_emit_s, t_arrival_s, tof_s, range_m, v_r_mps, snr_db`` plus optional
-``range_std_m, v_r_std_mps``); lines starting with ``#`` are header comments.
+``range_std_m, v_r_std_mps``, or ``sigma_range_m, sigma_v_r_mps`` as ``seamodem rx`` writes them); lines starting with ``#`` are header comments.
 This module does not import the receiver: any program that writes those
 columns can feed it.
 """
@@ -178,8 +178,13 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
         start_xy = tuple(float(v) for v in geodetic_to_local(*start_pair, *origin))
     else:
         beacon_xy, start_xy = beacon_pair, start_pair
-    meas = read_columns(measurements, MEASUREMENT_COLUMNS, optional=("range_std_m", "v_r_std_mps"),
+    meas = read_columns(measurements, MEASUREMENT_COLUMNS,
+                        optional=("range_std_m", "v_r_std_mps", "sigma_range_m", "sigma_v_r_mps"),
                         time_column="t_arrival_s", what="measurement file")
+    # seamodem rx writes the per-frame standard deviations as sigma_range_m, sigma_v_r_mps
+    for ours, theirs in (("range_std_m", "sigma_range_m"), ("v_r_std_mps", "sigma_v_r_mps")):
+        if ours not in meas and theirs in meas:
+            meas[ours] = meas[theirs]
     samples = read_columns(imu, IMU_COLUMNS, time_column="t_s", what="IMU file")
     truth_cols = read_columns(truth, TRUTH_COLUMNS, time_column="t_s", what="truth file") if truth else None
     result = run_track(meas, samples, beacon_xy=beacon_xy, start_xy=start_xy, start_speed_mps=start_speed_mps,
