@@ -138,9 +138,19 @@ def fit_paths(
     corr = windows @ np.conj(template)
     cand = t0_s + m / fs - tau_a
 
+    columns: dict[float, np.ndarray] = {}
+
+    def column(delay):
+        # one path's response R(t − delay) at every candidate; cached, since the dichotomy
+        # moves one delay at a time and the others' columns are reused
+        key = float(delay)
+        if key not in columns:
+            d = cand[:, None] - key - lags[None, :] * T
+            columns[key] = raised_cosine(d, T, config.rolloff) @ rho
+        return columns[key]
+
     def model(delays):
-        d = cand[:, None, None] - np.asarray(delays)[None, :, None] - lags[None, None, :] * T
-        return np.sum(rho * raised_cosine(d, T, config.rolloff), axis=2)
+        return np.column_stack([column(d) for d in delays])
 
     def solve(delays):
         mat = model(delays)
