@@ -23,6 +23,7 @@ and in the tone baseband (carrier f_pt) the tone is a w(·) e^{j2π f_pt ε t}.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,6 +63,28 @@ def dichotomy_max(f, lo: float, hi: float, *, tol: float, max_iter: int = 200) -
         else:
             hi = mid + eps
     return 0.5 * (lo + hi)
+
+
+#: samples per symbol period of the tabulated pulse the matched filter interpolates
+_PULSE_TABLE_RATE = 2048
+
+
+@lru_cache(maxsize=16)
+def _srrc_table(rolloff: float, n_half: int) -> tuple[np.ndarray, np.ndarray]:
+    """√T·g(uT) on u ∈ [−n_half, n_half] at 1/2048 of a symbol (unit symbol period)."""
+    u = np.linspace(-n_half, n_half, 2 * n_half * _PULSE_TABLE_RATE + 1)
+    return u, srrc_pulse(u, 1.0, rolloff)
+
+
+def _srrc_interp(u: np.ndarray, rolloff: float, n_half: int) -> np.ndarray:
+    """√T·g(uT) by linear interpolation in the table: error ≤ (Δu)²/8·max|g''| ≈ 1e-6 (−120 dB),
+    far below any noise the receiver sees, at a twentieth of the cost of the closed form."""
+    _, values = _srrc_table(rolloff, n_half)
+    x = (np.asarray(u, dtype=float) + n_half) * _PULSE_TABLE_RATE  # uniform grid: index directly
+    i = np.clip(np.floor(x).astype(np.int64), 0, values.size - 2)
+    f = x - i
+    out = values[i] * (1.0 - f) + values[i + 1] * f
+    return np.where((x >= 0) & (x <= values.size - 1), out, 0.0)
 
 
 def matched_filter(
@@ -112,7 +135,7 @@ def matched_filter(
     idx = first[:, None] + np.arange(width)[None, :]
     u = t0_s + idx / fs - tk[:, None]
     inside = (idx >= n_lo) & (idx < n_hi) & (np.abs(u) <= half)
-    g = srrc_pulse(u, T, config.rolloff) * inside
+    g = _srrc_interp(u / T, float(config.rolloff), n_half) * (inside / math.sqrt(T))
     samples = x[np.clip(idx - n_lo, 0, n_hi - n_lo - 1)]
     norm = np.sqrt(T / srrc_truncation_energy(float(config.rolloff), n_half)) / (fs * T)
     return np.einsum("kn,kn->k", g, samples) * norm
