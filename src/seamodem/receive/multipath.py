@@ -29,6 +29,7 @@ first-order Doppler drift, so that the Doppler found is the first path's.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,6 +72,29 @@ class PathFit:
     delays_s: np.ndarray
     amplitudes: np.ndarray
     first_s: float
+
+
+#: table points per symbol of the pilot-correlation response R (linear interpolation error ≈ 5e-6 of R(0))
+_RESPONSE_TABLE_RATE = 512
+
+
+@lru_cache(maxsize=8)
+def _response_table(rolloff: float, rho: tuple, half_extent_symbols: int):
+    """u ↦ R(uT) = Σ_d ρ_d rc((u − d)T) for |u| ≤ half_extent, by linear interpolation in a table."""
+    u = np.linspace(-half_extent_symbols, half_extent_symbols, 2 * half_extent_symbols * _RESPONSE_TABLE_RATE + 1)
+    lags = np.arange(-_SIDELOBE_LAGS, _SIDELOBE_LAGS + 1)
+    values = np.zeros_like(u)
+    for d, r in zip(lags, rho):
+        values += r * raised_cosine(u - d, 1.0, rolloff)
+
+    def interpolate(x):
+        pos = (np.asarray(x, dtype=float) + half_extent_symbols) * _RESPONSE_TABLE_RATE
+        i = np.clip(np.floor(pos).astype(np.int64), 0, values.size - 2)
+        f = pos - i
+        out = values[i] * (1.0 - f) + values[i + 1] * f
+        return np.where((pos >= 0) & (pos <= values.size - 1), out, 0.0)
+
+    return interpolate
 
 
 def fit_paths(
@@ -139,14 +163,17 @@ def fit_paths(
     cand = t0_s + m / fs - tau_a
 
     columns: dict[float, np.ndarray] = {}
+    extent = (cand[-1] - cand[0]) / T + 2 * half_window_symbols + 4
+    if window_s is not None:
+        extent += (window_s[1] - window_s[0]) / T
+    table = _response_table(float(config.rolloff), tuple(rho.tolist()), int(2 ** math.ceil(math.log2(extent))))
 
     def column(delay):
-        # one path's response R(t − delay) at every candidate; cached, since the dichotomy
-        # moves one delay at a time and the others' columns are reused
+        # one path's response R(t − delay) at every candidate, interpolated in a table of
+        # R(uT) = Σ_d ρ_d rc((u − d)T); cached, since the dichotomy moves one delay at a time
         key = float(delay)
         if key not in columns:
-            d = cand[:, None] - key - lags[None, :] * T
-            columns[key] = raised_cosine(d, T, config.rolloff) @ rho
+            columns[key] = table((cand - key) / T)
         return columns[key]
 
     def model(delays):
