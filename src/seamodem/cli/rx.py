@@ -8,9 +8,11 @@ import math
 import sys
 import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
+from ..batch.cli import add_batch_options, run_batch, wants_batch
 from ..errors import InputFileError, SeamodemError
 from ..io.files import atomic_outputs, check_writable
 from ..io.sidecar import read_sidecar, sidecar_path
@@ -33,7 +35,12 @@ def add_parser(sub) -> None:
             "recording's own .json), or from --emit-start/--emit-period."
         ),
     )
-    p.add_argument("recording", metavar="RECORDING", help="audio file (WAV...), any sample rate holding the band")
+    p.add_argument(
+        "recording",
+        nargs="+",
+        metavar="RECORDING",
+        help="audio file (WAV...), any sample rate holding the band; several: decoded in parallel into one output",
+    )
     add_config_options(p)
     p.add_argument("-o", "--output", required=True, metavar="MEAS", help="output .csv or .jsonl")
     p.add_argument("--emit-start", type=float, metavar="T0", help="emission time of frame 0 [s] (PPS beacon)")
@@ -71,6 +78,7 @@ def add_parser(sub) -> None:
     p.add_argument("--plot", metavar="DIR", help="write figures of the first --plot-frames frames to DIR")
     p.add_argument("--plot-frames", type=int, default=3, metavar="N", help="frames to plot (default 3)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    add_batch_options(p)
     p.set_defaults(run=run)
 
 
@@ -118,16 +126,24 @@ def _emissions(args, sidecar, duration_s: float) -> Emissions:
     return Emissions(times_s=times)
 
 
-def run(args: argparse.Namespace) -> int:
-    out = check_writable(args.output)
-    if out.suffix.lower() not in (".csv", ".jsonl"):
-        raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+class _Inputs(NamedTuple):
+    """What the receiver of one recording needs, from the options and the sidecar."""
+
+    info: object
+    sidecar: dict | None
+    config: object
+    emissions: Emissions
+    pilot: np.ndarray | None
+    payloads: list | None
+    sound_speed_mps: float
+
+
+def _inputs(args: argparse.Namespace) -> _Inputs:
+    """Header, sidecar, configuration, emissions, pilot, payloads and c of ``args.recording``."""
     info, _ = wav_channel(args.recording, channel=args.channel)
     sidecar = _sidecar_for(args)
     if sidecar is not None and not args.config:
         args.config = str(sidecar_path(args.recording))
-    if args.turbo_passes < 1:
-        raise SeamodemError(f"turbo-passes: must be >= 1, got {args.turbo_passes}")
     config = config_from_args(args)
     emissions = _emissions(args, sidecar, info.frames / info.samplerate)
     pilot = None
@@ -152,6 +168,19 @@ def run(args: argparse.Namespace) -> int:
         sound_speed = float((sidecar or {}).get("channel", {}).get("sound_speed_mps", DEFAULT_SOUND_SPEED_MPS))
     if not (math.isfinite(sound_speed) and sound_speed > 0):
         raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
+    return _Inputs(info, sidecar, config, emissions, pilot, payloads, sound_speed)
+
+
+def run(args: argparse.Namespace) -> int:
+    if wants_batch(args):
+        return run_batch(args)
+    args.recording = args.recording[0]
+    out = check_writable(args.output)
+    if out.suffix.lower() not in (".csv", ".jsonl"):
+        raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+    if args.turbo_passes < 1:
+        raise SeamodemError(f"turbo-passes: must be >= 1, got {args.turbo_passes}")
+    info, _, config, emissions, pilot, payloads, sound_speed = _inputs(args)
     if args.plot:
         plot_dir = Path(args.plot)
         if not plot_dir.is_dir():

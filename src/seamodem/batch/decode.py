@@ -1,0 +1,560 @@
+"""Decode many recordings, or one long recording in overlapping segments, in parallel.
+
+Each recording is cut into parts: the whole file, or segments
+[start, end) of ``segment_s`` seconds. A part runs the streaming
+:class:`~seamodem.receive.receiver.Receiver` on the samples
+[start − overlap, end + overlap) and keeps the frames that arrive in
+[start − guard, end + guard); where two neighbouring segments found the same
+frame in that band around their boundary, the merge keeps one (the one of the
+segment its arrival lies in). The overlap exceeds a frame's span plus the guard,
+so a frame cut by a boundary is whole in at least one part: found once, never
+lost nor doubled.
+
+Parts go through :func:`~seamodem.batch.runner.run_tasks` (serial, local
+processes or Dask). Each finished part is saved in ``OUTPUT.parts/`` as soon
+as it arrives, so that a failure or an interruption loses nothing decoded, and a
+rerun with ``resume=True`` skips the parts already there. The merged output is
+written at the end: recordings in the order given, records by arrival time
+within each, with the recording in the ``source`` column.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import os
+import shutil
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import soundfile
+
+from .._version import __version__
+from ..config import FrameConfig
+from ..errors import ConfigError, InputFileError, SeamodemError
+from ..io.files import atomic_outputs, check_writable
+from ..io.wav import wav_channel
+from ..receive.receiver import (
+    NOISE_GAP_S,
+    NOISE_WINDOW_S,
+    Emissions,
+    Receiver,
+    ReceiverWarning,
+)
+from ..receive.records import MeasurementRecord, write_measurements
+from .runner import TaskResult, run_tasks
+
+__all__ = [
+    "Recording",
+    "Part",
+    "PartFailure",
+    "BatchResult",
+    "plan_parts",
+    "decode_part",
+    "decode_files",
+    "min_overlap_s",
+    "PART_FORMAT",
+]
+
+PART_FORMAT = "seamodem.batch-part/1"
+
+#: samples read per block, as :func:`~seamodem.receive.receiver.receive_file` (same blocks, same numbers)
+BLOCK = 1 << 20
+#: the detector's noise context before a frame [s] (PilotDetector.context)
+DETECTION_CONTEXT_S = 0.5
+#: half-width of the band around a segment boundary where neighbours' frames are reconciled, in frames
+GUARD_FRAMES = 0.25
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One recording to decode and what its receiver needs.
+
+    Parameters
+    ----------
+    path : str or Path
+        Audio file; written as given in the ``source`` column.
+    config : FrameConfig
+    emissions : Emissions
+    channel : int, optional
+        Channel of a multichannel file.
+    options : dict
+        Keyword arguments of :class:`~seamodem.receive.receiver.Receiver`
+        (sound_speed_mps, clock_offset_s, turnaround_s, v_max_mps,
+        false_alarms_per_hour, pilot); not ``on_frame``.
+    """
+
+    path: str | Path
+    config: FrameConfig
+    emissions: Emissions
+    channel: int | None = None
+    options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if "on_frame" in self.options:
+            raise ConfigError("on_frame", "is not available in batch decoding (parts run in other processes)")
+
+    @property
+    def sound_speed_mps(self) -> float:
+        return float(self.options.get("sound_speed_mps", 1500.0))
+
+    @property
+    def v_max_mps(self) -> float:
+        return float(self.options.get("v_max_mps", 5.0))
+
+
+def _frame_span_s(rec: Recording) -> float:
+    """Longest a received frame lasts, with the receiver's tail and noise window after it [s]."""
+    stretch = 1 + rec.v_max_mps / rec.sound_speed_mps
+    return rec.config.frame_duration_s * stretch + 0.02 + NOISE_GAP_S + NOISE_WINDOW_S
+
+
+def _guard_s(rec: Recording) -> float:
+    return GUARD_FRAMES * rec.config.frame_duration_s
+
+
+def min_overlap_s(rec: Recording) -> float:
+    """Smallest overlap of segments for ``rec``: a frame's span plus the reconciling guard [s]."""
+    return _frame_span_s(rec) + _guard_s(rec)
+
+
+def default_overlap_s(rec: Recording) -> float:
+    """Overlap giving a frame near a boundary the same detection context as in the whole file [s]."""
+    return min_overlap_s(rec) + DETECTION_CONTEXT_S + NOISE_GAP_S + NOISE_WINDOW_S
+
+
+@dataclass(frozen=True)
+class Part:
+    """One unit of work: samples [lo, hi) of a recording, keeping arrivals in [keep_lo_s, keep_hi_s).
+
+    ``start``/``end`` [samples] are the segment proper; ``segment`` its number
+    (0 for a whole file), ``n_segments`` how many the recording has; ``file``
+    the absolute path the worker reads (workers of a cluster have another
+    working directory), ``recording.path`` the name written in ``source``.
+    """
+
+    recording: Recording
+    file: str
+    file_index: int
+    segment: int
+    n_segments: int
+    start: int
+    end: int
+    lo: int
+    hi: int
+    fs: float
+    n_samples: int
+    channel: int
+    keep_lo_s: float
+    keep_hi_s: float
+
+    @property
+    def label(self) -> str:
+        if self.n_segments == 1:
+            return str(self.recording.path)
+        return (
+            f"{self.recording.path} segment {self.segment + 1}/{self.n_segments} "
+            f"[{self.start / self.fs:.3f}, {self.end / self.fs:.3f}) s"
+        )
+
+    def key(self) -> str:
+        """Identity of the work: file (path, size, modification time), range and every option."""
+        path = Path(self.file)
+        st = path.stat()
+        e = self.recording.emissions
+        material = {
+            "version": __version__,
+            "path": str(path),
+            "size": st.st_size,
+            "mtime_ns": st.st_mtime_ns,
+            "range": [self.start, self.end, self.lo, self.hi, self.channel],
+            "keep": [self.keep_lo_s, self.keep_hi_s],
+            "config": self.recording.config.to_dict(),
+            "emissions": [None if e.times_s is None else e.times_s.tolist(), e.start_s, e.period_s],
+            "options": {k: _plain(v) for k, v in sorted(self.recording.options.items())},
+        }
+        text = json.dumps(material, sort_keys=True, default=str)
+        return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _plain(value):
+    if isinstance(value, np.ndarray):
+        return [np.real(value).tolist(), np.imag(value).tolist()] if np.iscomplexobj(value) else value.tolist()
+    return value
+
+
+def plan_parts(
+    recordings: Sequence[Recording], *, segment_s: float | None = None, overlap_s: float | None = None
+) -> tuple[list[Part], list[tuple[int, str]]]:
+    """Cut recordings into parts; returns (parts, [(file_index, error)] of unreadable files).
+
+    Raises
+    ------
+    ConfigError
+        ``segment_s`` not positive, ``overlap_s`` below :func:`min_overlap_s`.
+    """
+    if segment_s is not None and not (isinstance(segment_s, (int, float)) and math.isfinite(segment_s) and segment_s > 0):
+        raise ConfigError("segment", f"must be a positive number of seconds, got {segment_s!r}")
+    parts: list[Part] = []
+    failed: list[tuple[int, str]] = []
+    for i, rec in enumerate(recordings):
+        try:
+            info, ch = wav_channel(rec.path, channel=rec.channel)
+        except SeamodemError as exc:
+            failed.append((i, str(exc)))
+            continue
+        fs, n = float(info.samplerate), int(info.frames)
+        file = str(Path(rec.path).resolve())
+        if segment_s is None or segment_s * fs >= n:
+            parts.append(Part(rec, file, i, 0, 1, 0, n, 0, n, fs, n, ch, -math.inf, math.inf))
+            continue
+        overlap = default_overlap_s(rec) if overlap_s is None else overlap_s
+        if not (isinstance(overlap, (int, float)) and overlap >= min_overlap_s(rec)):
+            raise ConfigError(
+                "overlap", f"must be at least a frame's span plus the guard, {min_overlap_s(rec):.3f} s, got {overlap!r}"
+            )
+        guard = _guard_s(rec)
+        if segment_s <= 2 * guard:
+            raise ConfigError("segment", f"must be longer than {2 * guard:.3f} s (half a frame), got {segment_s!r}")
+        seg, ov = round(segment_s * fs), math.ceil(overlap * fs)
+        bounds = list(range(0, n, seg))
+        for k, start in enumerate(bounds):
+            end = min(n, start + seg)
+            keep_lo = -math.inf if k == 0 else start / fs - guard
+            keep_hi = math.inf if k == len(bounds) - 1 else end / fs + guard
+            parts.append(
+                Part(rec, file, i, k, len(bounds), start, end, max(0, start - ov), min(n, end + ov), fs, n, ch, keep_lo,
+                     keep_hi)
+            )
+    return parts, failed
+
+
+def _blocks(part: Part, stats: dict) -> Iterator[np.ndarray]:
+    """Samples [lo, hi) of the part's channel, checked for NaN and truncation, with clipping counted."""
+    path = part.recording.path
+    with soundfile.SoundFile(part.file) as f:
+        pcm = f.subtype.startswith("PCM")
+        f.seek(part.lo)
+        pos = part.lo
+        while pos < part.hi:
+            try:
+                data = f.read(min(BLOCK, part.hi - pos), dtype="float64", always_2d=True)
+            except (soundfile.LibsndfileError, RuntimeError) as exc:
+                raise InputFileError(f"recording {path} is truncated or corrupt: {exc}") from None
+            if data.shape[0] == 0:
+                raise InputFileError(f"recording {path} is truncated: header says {part.n_samples} samples, read {pos}")
+            x = np.ascontiguousarray(data[:, part.channel])
+            if not np.all(np.isfinite(x)):
+                raise InputFileError(f"recording {path} contains NaN or infinite samples (near sample {pos})")
+            # clipping and silence are counted over the segment proper, so that the file's totals add up
+            a, b = max(pos, part.start) - pos, min(pos + len(x), part.end) - pos
+            if b > a:
+                stats["clipped"] += int(np.count_nonzero(np.abs(x[a:b]) >= (1.0 - 2.0**-15 if pcm else 1.0)))
+                stats["silent"] = stats["silent"] and not np.any(x[a:b])
+            pos += len(x)
+            yield x
+
+
+def _shifted(e: Emissions, t0_s: float) -> Emissions:
+    """The same emissions on a clock whose zero is at ``t0_s``."""
+    if t0_s == 0:
+        return e
+    if e.times_s is None:
+        return Emissions(start_s=e.start_s - t0_s, period_s=e.period_s)
+    return Emissions(times_s=e.times_s - t0_s)
+
+
+def decode_part(part: Part) -> dict[str, Any]:
+    """Records of one part (the task run by the workers).
+
+    Returns
+    -------
+    dict
+        ``records`` (list of MeasurementRecord, times on the recording's clock,
+        ``source`` set), ``clipped`` and ``silent`` (over the segment proper),
+        ``warnings`` (one-line messages).
+    """
+    rec = part.recording
+    t0 = part.lo / part.fs
+    stats = {"clipped": 0, "silent": True}
+    cut: list[float] = []
+
+    def on_frame(m, *_):
+        if not m.complete:
+            cut.append(m.pilot.t_start_s + t0)
+
+    rx = Receiver(rec.config, emissions=_shifted(rec.emissions, t0), on_frame=on_frame, **rec.options)
+    kept = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ReceiverWarning)
+        for r in rx.run(_blocks(part, stats), fs=part.fs):
+            t_arr = r.t_arrival_s + t0
+            if part.keep_lo_s <= t_arr < part.keep_hi_s:
+                kept.append(_on_file_clock(r, t_arr, rec.emissions, str(rec.path)))
+    messages = []
+    for w in caught:
+        text = str(w.message)
+        if issubclass(w.category, ReceiverWarning) and "is cut by the end of the recording" not in text:
+            messages.append(text)
+        elif not issubclass(w.category, ReceiverWarning):
+            messages.append(f"{w.category.__name__}: {text}")
+    if part.hi == part.n_samples:
+        for t in cut:
+            if part.keep_lo_s <= t < part.keep_hi_s:
+                messages.append(
+                    f"recording {rec.path}: frame at {t:.3f} s is cut by the end of the recording: "
+                    "its Doppler uses the part received"
+                )
+    return {"records": kept, "clipped": stats["clipped"], "silent": stats["silent"], "warnings": messages}
+
+
+def _on_file_clock(r: MeasurementRecord, t_arrival_s: float, emissions: Emissions, source: str) -> MeasurementRecord:
+    """A part's record with its times on the recording's clock (t = 0 at its first sample)."""
+    k = r.frame_index
+    if k < 0:
+        t_emit = math.nan
+    elif emissions.times_s is None:
+        t_emit = emissions.start_s + k * emissions.period_s
+    else:
+        t_emit = float(emissions.times_s[k])
+    return dataclasses.replace(r, t_arrival_s=t_arrival_s, t_emit_s=t_emit, source=source)
+
+
+@dataclass(frozen=True)
+class PartFailure:
+    """A recording or segment that could not be decoded, and why (one line)."""
+
+    label: str
+    error: str
+
+
+@dataclass
+class BatchResult:
+    """What a batch decode did.
+
+    Attributes
+    ----------
+    records : list of MeasurementRecord
+        Merged: recordings in the order given, by arrival time within each.
+    failures : list of PartFailure
+    warnings : list of str
+    n_parts, n_resumed : int
+        Parts of the job, and how many were taken from an earlier run.
+    """
+
+    records: list
+    failures: list
+    warnings: list
+    n_parts: int
+    n_resumed: int
+
+    @property
+    def ok(self) -> bool:
+        return not self.failures
+
+
+def _parts_dir(output: Path) -> Path:
+    return output.with_name(output.name + ".parts")
+
+
+def _save_part(folder: Path, key: str, part: Part, value: dict) -> None:
+    """Write one finished part atomically (a crash mid-write leaves no half part)."""
+    data = {
+        "format": PART_FORMAT,
+        "source": str(part.recording.path),
+        "segment": part.segment,
+        "range": [part.start, part.end],
+        "clipped": value["clipped"],
+        "silent": value["silent"],
+        "warnings": value["warnings"],
+        "records": [r.to_dict() for r in value["records"]],
+    }
+    tmp = folder / f".{key}.tmp"
+    tmp.write_text(json.dumps(data), encoding="utf-8")
+    os.replace(tmp, folder / f"{key}.json")
+
+
+def _load_part(path: Path, source: str) -> dict | None:
+    """A saved part, its records' source as spelled now; None when unreadable (then decoded again)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("format") != PART_FORMAT:
+            return None
+        records = [MeasurementRecord(**(r | {"source": source})) for r in data["records"]]
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+    return {"records": records, "clipped": data["clipped"], "silent": data["silent"], "warnings": data["warnings"]}
+
+
+def decode_files(
+    recordings: Sequence[Recording | str | Path],
+    config: FrameConfig | None = None,
+    *,
+    emissions: Emissions | None = None,
+    channel: int | None = None,
+    segment_s: float | None = None,
+    overlap_s: float | None = None,
+    output: str | Path | None = None,
+    header: dict[str, Any] | None = None,
+    resume: bool = False,
+    backend: str = "processes",
+    workers: int | None = None,
+    scheduler=None,
+    progress: bool | None | Callable[[int, int], None] = None,
+    failed: Sequence[PartFailure] = (),
+    **receiver_options,
+) -> BatchResult:
+    """Decode several recordings, each whole or in overlapping segments, and merge the records.
+
+    Parameters
+    ----------
+    recordings : sequence of Recording, str or Path
+        Paths use ``config``, ``emissions``, ``channel`` and ``receiver_options``.
+    segment_s : float, optional
+        Cut recordings longer than this into segments [s] (default: whole files).
+    overlap_s : float, optional
+        Samples added before and after each segment [s]; at least
+        :func:`min_overlap_s` (default: that plus the detector's context, ≈ 1 s).
+    output : str or Path, optional
+        Merged .csv or .jsonl; finished parts are kept in ``OUTPUT.parts/``
+        until every part has succeeded.
+    header : dict, optional
+        Extra header of the output (command, sound speed...).
+    resume : bool
+        Reuse the parts of an earlier run found in ``OUTPUT.parts/`` (same
+        file, range and options); otherwise they are decoded again.
+    backend, workers, scheduler, progress
+        As :func:`~seamodem.batch.runner.run_tasks`.
+    failed : sequence of PartFailure
+        Recordings that failed before this call (e.g. no sidecar): reported
+        with the others, and the parts are kept for a rerun.
+
+    Returns
+    -------
+    BatchResult
+        Records, per-part failures (the job goes on past them) and warnings.
+    """
+    recs = []
+    for r in recordings:
+        if isinstance(r, Recording):
+            recs.append(r)
+        else:
+            if config is None or emissions is None:
+                raise ConfigError("config", "paths need a config and emissions (or give Recording objects)")
+            recs.append(Recording(r, config, emissions, channel, dict(receiver_options)))
+    folder = None
+    if output is not None:
+        output = check_writable(output)
+        if output.suffix.lower() not in (".csv", ".jsonl"):
+            raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(output)!r}")
+        folder = _parts_dir(output)
+    parts, unreadable = plan_parts(recs, segment_s=segment_s, overlap_s=overlap_s)
+    failures = list(failed) + [PartFailure(str(recs[i].path), err) for i, err in unreadable]
+    keys = [p.key() for p in parts] if folder is not None else [None] * len(parts)
+    values: list[dict | None] = [None] * len(parts)
+    if folder is not None:
+        if folder.is_dir() and not resume:
+            shutil.rmtree(folder)
+        folder.mkdir(exist_ok=True)
+        for i, key in enumerate(keys):
+            if (folder / f"{key}.json").is_file():
+                values[i] = _load_part(folder / f"{key}.json", str(parts[i].recording.path))
+    todo = [i for i, v in enumerate(values) if v is None]
+    n_resumed = len(parts) - len(todo)
+
+    def save(result: TaskResult) -> None:
+        if result.ok and folder is not None:
+            i = todo[result.index]
+            _save_part(folder, keys[i], parts[i], result.value)
+
+    results = run_tasks(
+        decode_part,
+        [parts[i] for i in todo],
+        backend=backend,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        on_result=save,
+        desc="rx",
+    )
+    for i, res in zip(todo, results):
+        if res.ok:
+            values[i] = res.value
+        else:
+            failures.append(PartFailure(parts[i].label, res.error))
+    records, notes = _merge(parts, values)
+    if output is not None:
+        head = {"created_by": f"seamodem {__version__}", **(header or {})}
+        head["recordings"] = [str(r.path) for r in recs]
+        with atomic_outputs(output) as (tmp,):
+            write_measurements(tmp, records, head, kind=output.suffix.lower().lstrip("."))
+        if not failures:
+            shutil.rmtree(folder, ignore_errors=True)
+    return BatchResult(records, failures, notes, len(parts), n_resumed)
+
+
+def _merge(parts: list[Part], values: list[dict | None]) -> tuple[list[MeasurementRecord], list[str]]:
+    """Records of every finished part, one per frame, recordings in order and by arrival within each."""
+    by_file: dict[int, list[tuple[Part, dict]]] = {}
+    for p, v in zip(parts, values):
+        if v is not None:
+            by_file.setdefault(p.file_index, []).append((p, v))
+    out: list[MeasurementRecord] = []
+    notes: list[str] = []
+    for i in sorted(by_file):
+        done = sorted(by_file[i], key=lambda pv: pv[0].segment)
+        rec = done[0][0].recording
+        kept: list[MeasurementRecord] = []
+        for p, v in done:
+            kept.extend(v["records"])
+            notes.extend(v["warnings"])
+        kept = _reconcile(kept, done, _guard_s(rec))
+        kept.sort(key=lambda r: r.t_arrival_s)
+        out.extend(kept)
+        whole = len(done) == done[0][0].n_segments
+        path = rec.path
+        clipped = sum(v["clipped"] for _, v in done)
+        if whole and all(v["silent"] for _, v in done):
+            notes.append(f"recording {path} is silent (all samples are zero)")
+        if clipped:
+            notes.append(f"recording {path}: {clipped} samples are clipped at full scale; measurements may be biased")
+        if whole and not kept:
+            notes.append(f"no frame found in {path}")
+    return out, notes
+
+
+def _reconcile(records: list[MeasurementRecord], done: list[tuple[Part, dict]], guard_s: float) -> list[MeasurementRecord]:
+    """Drop the second copy of a frame found by both segments around a boundary.
+
+    Each segment keeps arrivals up to ``guard_s`` past its boundary, so a frame
+    arriving near one is seen by both sides; the two estimates differ by far
+    less than the guard (a quarter frame, closer than any two frames). The copy
+    kept is the one of the segment the arrival lies in (the earlier segment's
+    when the two estimates straddle the boundary).
+    """
+    bounds = {p.segment: p.end / p.fs for p, _ in done}
+    drop = set()
+    for p, v in done:
+        if p.segment + 1 not in bounds:
+            continue
+        b = bounds[p.segment]
+        mine = [r for r in v["records"] if r.t_arrival_s >= b - guard_s]
+        theirs = [
+            r
+            for q, w in done
+            if q.segment == p.segment + 1
+            for r in w["records"]
+            if r.t_arrival_s < b + guard_s
+        ]
+        for a in mine:
+            for c in theirs:
+                if id(c) not in drop and abs(a.t_arrival_s - c.t_arrival_s) < guard_s:
+                    drop.add(id(c) if (a.t_arrival_s < b or c.t_arrival_s < b) else id(a))
+                    break
+    return [r for r in records if id(r) not in drop]
