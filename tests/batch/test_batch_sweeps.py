@@ -53,3 +53,22 @@ def test_ber_sweep_is_identical_serial_processes_and_dask(dask_client, tmp_path)
     as_text = [json.dumps([repr(p) for p in points]) for points in (serial, procs, dask)]
     assert as_text[0] == as_text[1] == as_text[2]
     assert serial[0].air_bit_errors != serial[1].air_bit_errors  # the points are distinct draws, not one repeated
+
+
+def test_ber_and_nav_commands_give_the_same_tables_on_dask_and_locally(dask_client, tmp_path, monkeypatch):
+    from seamodem.cli import main
+    import seamodem.navigation.montecarlo as mc
+
+    address = dask_client.scheduler.address
+    ber = ["ber", "--snr", "3", "6", "--frames", "2", "--passes", "1", "-q"]
+    assert main([*ber, "-o", str(tmp_path / "serial")]) == 0
+    assert main([*ber, "--scheduler", address, "-o", str(tmp_path / "dask")]) == 0
+    assert (tmp_path / "serial" / "ber.csv").read_text() == (tmp_path / "dask" / "ber.csv").read_text()
+
+    monkeypatch.setattr(mc.MissionConfig.__dataclass_fields__["path"], "default_factory", lambda: dict(SHORT_PATH))
+    nav = ["nav", "simulate", "--tcom", "3", "6", "--runs", "4", "--seed", "2", "-q"]
+    assert main([*nav, "-o", str(tmp_path / "threads")]) == 0
+    assert main([*nav, "--backend", "processes", "--workers", "2", "-o", str(tmp_path / "procs")]) == 0
+    assert main([*nav, "--scheduler", address, "-o", str(tmp_path / "navdask")]) == 0
+    table = (tmp_path / "threads" / "table.csv").read_text()
+    assert table == (tmp_path / "procs" / "table.csv").read_text() == (tmp_path / "navdask" / "table.csv").read_text()

@@ -45,6 +45,11 @@ def add_parser(sub) -> None:
     p.add_argument("--passes", type=int, default=3, metavar="N", help="most equaliser passes (default 3; 1 = DFE only)")
     p.add_argument("--seed", type=int, default=0, help="seed of the payloads and the channel (default 0)")
     p.add_argument("--workers", type=int, default=1, metavar="N", help="local processes (default 1)")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the SNR points on a Dask cluster (tcp://HOST:8786; pip install 'seamodem[dask]'); same numbers",
+    )
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or table")
     p.set_defaults(run=run)
@@ -98,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
         "period_s": args.period,
         "passes": args.passes,
         "seed": args.seed,
+        "backend": "dask" if args.scheduler else ("serial" if args.workers == 1 else "processes"),
     }
     with atomic_outputs(*paths) as (csv_tmp, json_tmp, png_tmp):
         with open(csv_tmp, "w", newline="", encoding="utf-8") as f:
@@ -118,25 +124,24 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _sweep(ber_sweep, config, scenario, snrs, args, base_dir):
-    from .._progress import progress_bar
+    """The sweep on seamodem.batch: serially, on local processes or on a Dask cluster (same numbers)."""
+    from functools import partial
 
+    from ..batch.runner import map_tasks
+
+    if args.scheduler:
+        backend = "dask"
+    else:
+        backend = "serial" if args.workers == 1 else "processes"
+    mapper = partial(
+        map_tasks,
+        backend=backend,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.quiet else None,
+    )
     kwargs = dict(frames=args.frames, period_s=args.period, seed=args.seed, passes=args.passes, base_dir=base_dir)
-    with progress_bar(total=len(snrs), desc="ber", unit="SNR", enabled=False if args.quiet else None) as bar:
-
-        def mapper(fn, tasks):
-            if args.workers == 1:
-                for t in tasks:
-                    yield fn(t)
-                    bar.update(1)
-                return
-            from concurrent.futures import ProcessPoolExecutor
-
-            with ProcessPoolExecutor(max_workers=args.workers) as pool:
-                for r in pool.map(fn, tasks):
-                    bar.update(1)
-                    yield r
-
-        return ber_sweep(config, scenario, snrs, mapper=mapper, **kwargs)
+    return ber_sweep(config, scenario, snrs, mapper=mapper, **kwargs)
 
 
 def format_table(points, theory) -> str:

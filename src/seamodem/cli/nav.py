@@ -46,7 +46,12 @@ def add_parser(sub) -> None:
                    help="position the error is measured on: the filter's real-time estimate (paper 000, default), "
                         "the RTS-smoothed track (post-processing), or the last frame's fix held until the next "
                         "(the diagnostic of docs/navigation.md)")
-    s.add_argument("--workers", type=int, help="threads (default: all cores)")
+    s.add_argument("--workers", type=int, help="threads, or processes with --backend (default: all cores)")
+    s.add_argument("--backend", choices=("threads", "serial", "processes", "dask"), default="threads",
+                   help="where the runs go: local threads (default), serially, local processes, or a Dask "
+                        "cluster (--scheduler); the table is the same bit for bit")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="Dask scheduler tcp://HOST:8786 (implies --backend dask; pip install 'seamodem[dask]')")
     s.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(run=run_simulate)
@@ -108,8 +113,10 @@ def run_simulate(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     total = 2 * len(args.tcom) * args.runs
     with progress_bar(total=total, desc="missions", enabled=False if args.quiet else None) as bar:
+        backend = "dask" if args.scheduler else (None if args.backend == "threads" else args.backend)
         result = run_monte_carlo(config, tcoms=tuple(args.tcom), runs=args.runs, seed=args.seed,
-                                 workers=args.workers, progress=bar.update)
+                                 workers=args.workers, progress=bar.update, backend=backend,
+                                 scheduler=args.scheduler)
     text = format_table(result)
     print(text)
     with atomic_outputs(out / "table.csv", out / "table.txt", out / "config.json") as (tcsv, ttxt, tjson):
