@@ -49,15 +49,6 @@ def recordings(tmp_path_factory):
     return paths
 
 
-@pytest.fixture(scope="module")
-def dask_client():
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
-    client = distributed.Client(cluster)
-    yield client
-    client.close()
-    cluster.close()
-
-
 def as_rows(records):
     """Records as JSON text: exact floats (repr), and NaN equal to NaN (unlike in a dict compare)."""
     return json.dumps([r.to_dict() for r in records])

@@ -13,16 +13,6 @@ from seamodem.errors import ConfigError, SeamodemError
 distributed = pytest.importorskip("distributed")
 
 
-@pytest.fixture(scope="module")
-def dask_client():
-    """A local Dask cluster of 2 threaded workers (processes=False: starts in a fraction of a second)."""
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
-    client = distributed.Client(cluster)
-    yield client
-    client.close()
-    cluster.close()
-
-
 def seeded_point(task):
     """A small Monte Carlo estimate whose noise comes from the task's own seed."""
     seed, index, n = task

@@ -16,15 +16,6 @@ distributed = pytest.importorskip("distributed")
 SHORT_PATH = {"lane_length_m": 40.0, "n_lanes": 2, "y0_m": 80.0}
 
 
-@pytest.fixture(scope="module")
-def dask_client():
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0")
-    client = distributed.Client(cluster)
-    yield client
-    client.close()
-    cluster.close()
-
-
 def test_monte_carlo_is_identical_on_threads_serial_processes_and_dask(dask_client):
     config = MissionConfig(path=SHORT_PATH)
     kw = {"tcoms": (3, 6), "runs": 6, "seed": 5, "workers": 2}

@@ -37,6 +37,7 @@ from .profiles import ConstantProfile, DopplerProfile, RampProfile, SampledProfi
 from .propagation import sound_speed_mackenzie
 
 __all__ = [
+    "read_scenario_tables",
     "Environment",
     "Beacon",
     "Vehicle",
@@ -627,11 +628,22 @@ def load_scenario(path: str | Path) -> Scenario:
         An unknown key or an invalid value, named as ``section.key``.
     """
     path = Path(path)
+    return parse_scenario(read_scenario_tables(path), base_dir=path.parent)
+
+
+def read_scenario_tables(path: str | Path) -> dict[str, Any]:
+    """A scenario file's tables as parsed TOML, not yet validated (see :func:`parse_scenario`).
+
+    Raises
+    ------
+    InputFileError
+        Missing file or invalid TOML.
+    """
+    path = Path(path)
     if not path.is_file():
         raise InputFileError(f"scenario file not found: {path}")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(f"scenario {path} is not valid TOML: {exc}") from None
-    return parse_scenario(data, base_dir=path.parent)
 

@@ -6,12 +6,11 @@ import argparse
 import csv
 import json
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, InputFileError, SeamodemError
+from ..errors import ConfigError, SeamodemError
 from ..io.files import atomic_outputs, check_writable
 from ._common import add_config_options, command_line, config_from_args
 
@@ -56,19 +55,14 @@ def add_parser(sub) -> None:
 
 
 def _scenario(path: str | None) -> tuple[dict | None, Path]:
+    """The scenario's tables (validated now, for one-line errors before any work) and its folder."""
     if path is None:
         return None, Path(".")
-    from ..channel.scenario import parse_scenario
+    from ..channel.scenario import parse_scenario, read_scenario_tables
 
-    p = Path(path)
-    if not p.is_file():
-        raise InputFileError(f"scenario file not found: {p}")
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputFileError(f"scenario {p} is not valid TOML: {exc}") from None
-    parse_scenario(data, base_dir=p.parent)  # one-line errors now, not in a worker
-    return data, p.parent
+    data = read_scenario_tables(path)
+    parse_scenario(data, base_dir=Path(path).parent)
+    return data, Path(path).parent
 
 
 def run(args: argparse.Namespace) -> int:
