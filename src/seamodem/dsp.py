@@ -11,7 +11,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.signal
 
-__all__ = ["bb2pb", "pb2bb", "lowpass_taps"]
+__all__ = ["bb2pb", "pb2bb", "lowpass_taps", "UniformTable"]
 
 
 @lru_cache(maxsize=32)
@@ -78,3 +78,33 @@ def pb2bb(
     mixed = 2.0 * np.asarray(x_pb) * np.exp(-2j * np.pi * fc * t)
     taps = lowpass_taps(float(fs), float(passband_hz), float(stopband_hz), float(attenuation_db))
     return scipy.signal.oaconvolve(mixed, taps, mode="same")
+
+
+class UniformTable:
+    """A function tabulated on a uniform grid, read back by linear interpolation (0 outside).
+
+    ``f`` is evaluated once at x = −half_extent + k/rate, k = 0 … 2·half_extent·rate.
+    Reading indexes the grid directly (no search), so that hot loops pay a few
+    array operations per point instead of the closed form. The error is at most
+    (1/rate)²/8 · max|f''|.
+
+    Parameters
+    ----------
+    f : callable
+        Vectorised function of x.
+    half_extent : int
+        The table covers [−half_extent, half_extent].
+    rate : int
+        Points per unit of x.
+    """
+
+    def __init__(self, f, half_extent: int, rate: int):
+        self.half_extent, self.rate = int(half_extent), int(rate)
+        self.values = np.asarray(f(np.linspace(-half_extent, half_extent, 2 * self.half_extent * self.rate + 1)))
+
+    def __call__(self, x) -> np.ndarray:
+        pos = (np.asarray(x, dtype=float) + self.half_extent) * self.rate
+        i = np.clip(np.floor(pos).astype(np.int64), 0, self.values.size - 2)
+        frac = pos - i
+        out = self.values[i] * (1.0 - frac) + self.values[i + 1] * frac
+        return np.where((pos >= 0) & (pos <= self.values.size - 1), out, 0.0)

@@ -23,14 +23,15 @@ and in the tone baseband (carrier f_pt) the tone is a w(·) e^{j2π f_pt ε t}.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import scipy.fft
 import scipy.signal
 
 from ..config import FrameConfig
+from ..dsp import UniformTable
 from ..transmit.frame import tone_envelope
 from ..transmit.pulse import srrc_pulse, srrc_truncation_energy
 
@@ -70,21 +71,15 @@ _PULSE_TABLE_RATE = 2048
 
 
 @lru_cache(maxsize=16)
-def _srrc_table(rolloff: float, n_half: int) -> tuple[np.ndarray, np.ndarray]:
+def _srrc_table(rolloff: float, n_half: int) -> UniformTable:
     """√T·g(uT) on u ∈ [−n_half, n_half] at 1/2048 of a symbol (unit symbol period)."""
-    u = np.linspace(-n_half, n_half, 2 * n_half * _PULSE_TABLE_RATE + 1)
-    return u, srrc_pulse(u, 1.0, rolloff)
+    return UniformTable(lambda u: srrc_pulse(u, 1.0, rolloff), n_half, _PULSE_TABLE_RATE)
 
 
 def _srrc_interp(u: np.ndarray, rolloff: float, n_half: int) -> np.ndarray:
     """√T·g(uT) by linear interpolation in the table: error ≤ (Δu)²/8·max|g''| ≈ 1e-6 (−120 dB),
     far below any noise the receiver sees, at a twentieth of the cost of the closed form."""
-    _, values = _srrc_table(rolloff, n_half)
-    x = (np.asarray(u, dtype=float) + n_half) * _PULSE_TABLE_RATE  # uniform grid: index directly
-    i = np.clip(np.floor(x).astype(np.int64), 0, values.size - 2)
-    f = x - i
-    out = values[i] * (1.0 - f) + values[i + 1] * f
-    return np.where((x >= 0) & (x <= values.size - 1), out, 0.0)
+    return _srrc_table(rolloff, n_half)(u)
 
 
 def matched_filter(

@@ -29,12 +29,13 @@ first-order Doppler drift, so that the Doppler found is the first path's.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from ..config import FrameConfig
+from ..dsp import UniformTable
 from .detect import pilot_template
 from .doppler import dichotomy_max, matched_filter
 
@@ -79,22 +80,14 @@ _RESPONSE_TABLE_RATE = 512
 
 
 @lru_cache(maxsize=8)
-def _response_table(rolloff: float, rho: tuple, half_extent_symbols: int):
+def _response_table(rolloff: float, rho: tuple, half_extent_symbols: int) -> UniformTable:
     """u ↦ R(uT) = Σ_d ρ_d rc((u − d)T) for |u| ≤ half_extent, by linear interpolation in a table."""
-    u = np.linspace(-half_extent_symbols, half_extent_symbols, 2 * half_extent_symbols * _RESPONSE_TABLE_RATE + 1)
     lags = np.arange(-_SIDELOBE_LAGS, _SIDELOBE_LAGS + 1)
-    values = np.zeros_like(u)
-    for d, r in zip(lags, rho):
-        values += r * raised_cosine(u - d, 1.0, rolloff)
-
-    def interpolate(x):
-        pos = (np.asarray(x, dtype=float) + half_extent_symbols) * _RESPONSE_TABLE_RATE
-        i = np.clip(np.floor(pos).astype(np.int64), 0, values.size - 2)
-        f = pos - i
-        out = values[i] * (1.0 - f) + values[i + 1] * f
-        return np.where((pos >= 0) & (pos <= values.size - 1), out, 0.0)
-
-    return interpolate
+    return UniformTable(
+        lambda u: sum(r * raised_cosine(u - d, 1.0, rolloff) for d, r in zip(lags, rho)),
+        half_extent_symbols,
+        _RESPONSE_TABLE_RATE,
+    )
 
 
 def fit_paths(
@@ -198,7 +191,7 @@ def fit_paths(
     delays = [float(t_start_s)] if initial_delays_s is None else [float(d) for d in initial_delays_s]
     amps, _ = solve(delays)
     threshold = max(min_fraction, noise_fraction)
-    peak_response = float(np.sum(rho * raised_cosine(lags * T, T, config.rolloff)))  # R(0)
+    peak_response = float(table(0.0))  # R(0)
 
     def floor(amps, at_s):
         """Smallest amplitude a new path at ``at_s`` must have: ``threshold`` of the strongest, and
