@@ -34,7 +34,7 @@ from scipy.optimize import brentq
 
 from seamodem import get_preset
 from seamodem.decode.sweep import AWGN_SCENARIO, ber_sweep, snr_at_fer, theory_ber
-from seamodem.io.sidecar import read_sidecar
+from seamodem.io.sidecar import read_sidecar, sidecar_payloads, sidecar_pilot_bits
 from seamodem.receive.receiver import Emissions, receive_file
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,8 +53,8 @@ def make_recording(folder: Path, frames: int) -> Path:
 def receive(rec: Path, decode: bool):
     side = read_sidecar(rec.with_suffix(".json"))
     cfg = get_preset("jmse2024")
-    bits = np.array([int(c) for c in side["pilot"]["bits"]])
-    payloads = [bytes.fromhex(f["payload_hex"]) for f in side["frames"]]
+    bits = sidecar_pilot_bits(side)
+    payloads = sidecar_payloads(side)
     emissions = Emissions(times_s=np.array([f["t_emit_s"] for f in side["frames"]]))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

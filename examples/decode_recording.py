@@ -17,7 +17,7 @@ import numpy as np
 
 from seamodem import BeaconSchedule, Emissions, FrameConfig, get_preset, load_scenario, receive_file, write_beacon
 from seamodem import read_measurements, simulate_file, write_measurements
-from seamodem.io.sidecar import read_sidecar, sidecar_path
+from seamodem.io.sidecar import read_sidecar, sidecar_path, sidecar_payloads
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "straight_line.toml"
 
@@ -36,7 +36,7 @@ def main(out: Path, recording: Path | None) -> None:
     sidecar = read_sidecar(sidecar_path(recording))  # configuration, emission times, payloads sent, truth
     config = FrameConfig.from_dict(sidecar["config"])
     emissions = Emissions(times_s=np.array([f["t_emit_s"] for f in sidecar["frames"]]))
-    sent = [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
+    sent = sidecar_payloads(sidecar)  # the payload of each frame, to count bit errors
     c = float(sidecar.get("channel", {}).get("sound_speed_mps", 1500.0))
     records = receive_file(recording, config, emissions=emissions, sound_speed_mps=c, progress=False,
                            decode=True, payloads=sent)

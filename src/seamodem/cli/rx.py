@@ -15,7 +15,7 @@ import numpy as np
 from ..batch.cli import add_batch_options, run_batch, wants_batch
 from ..errors import InputFileError, SeamodemError
 from ..io.files import atomic_outputs, check_writable
-from ..io.sidecar import read_sidecar, sidecar_path
+from ..io.sidecar import read_sidecar, sidecar_path, sidecar_payloads, sidecar_pilot_bits
 from ..io.wav import wav_channel
 from ..receive.receiver import Emissions, ReceiverWarning, receive_file
 from ..receive.records import write_measurements
@@ -147,22 +147,17 @@ def _inputs(args: argparse.Namespace) -> _Inputs:
     config = config_from_args(args)
     emissions = _emissions(args, sidecar, info.frames / info.samplerate)
     pilot = None
-    if sidecar is not None and "bits" in sidecar.get("pilot", {}):
-        bits = np.array([int(ch) for ch in sidecar["pilot"]["bits"]])
-        if bits.size == config.n_pilot:
-            pilot = (1.0 - 2.0 * bits).astype(complex)
+    bits = sidecar_pilot_bits(sidecar) if sidecar is not None else None
+    if bits is not None and bits.size == config.n_pilot:
+        pilot = (1.0 - 2.0 * bits).astype(complex)
     two_way = ((sidecar or {}).get("channel") or {}).get("two_way")
     if two_way and args.turnaround is None and args.emit_start is None:
         # a two-way exchange (seamodem channel with [two_way]): its frames' t_emit_s are the polls
         args.turnaround = float(two_way["turnaround_s"])
         if not args.quiet:
             print(f"two-way recording: turnaround {args.turnaround:g} s from its sidecar")
-    payloads = None
-    if sidecar is not None and args.decode:
-        try:
-            payloads = [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
-        except (KeyError, TypeError, ValueError):
-            payloads = None  # an older or hand-made sidecar: decode without counting bit errors
+    # an older or hand-made sidecar without payloads: decode without counting bit errors
+    payloads = sidecar_payloads(sidecar) if sidecar is not None and args.decode else None
     sound_speed = args.sound_speed
     if sound_speed is None:
         sound_speed = float((sidecar or {}).get("channel", {}).get("sound_speed_mps", DEFAULT_SOUND_SPEED_MPS))

@@ -24,11 +24,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+
+import numpy as np
 from typing import Any
 
 from ..errors import InputFileError
 
-__all__ = ["SIDECAR_FORMAT", "sidecar_path", "read_sidecar", "write_json"]
+__all__ = ["SIDECAR_FORMAT", "sidecar_path", "read_sidecar", "write_json", "sidecar_pilot_bits", "sidecar_payloads"]
 
 SIDECAR_FORMAT = "seamodem.sidecar/1"
 
@@ -63,3 +65,19 @@ def read_sidecar(path: str | Path) -> dict[str, Any]:
         if key not in data:
             raise InputFileError(f"sidecar {path} lacks its {key!r} section")
     return data
+
+
+def sidecar_pilot_bits(sidecar: dict[str, Any]) -> np.ndarray | None:
+    """The pilot bits the sidecar records (0 → +1, 1 → −1), or None when it records none."""
+    text = (sidecar.get("pilot") or {}).get("bits")
+    if not isinstance(text, str) or not text or set(text) - {"0", "1"}:
+        return None
+    return np.array([int(ch) for ch in text], dtype=np.uint8)
+
+
+def sidecar_payloads(sidecar: dict[str, Any]) -> list[bytes] | None:
+    """Each frame's payload, by frame index, or None when a frame lacks a valid ``payload_hex``."""
+    try:
+        return [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
+    except (KeyError, TypeError, ValueError):
+        return None

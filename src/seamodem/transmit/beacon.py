@@ -17,9 +17,9 @@ import numpy as np
 from .. import __version__
 from .._progress import progress_bar
 from ..config import FrameConfig
-from ..errors import ConfigError, PayloadError
+from ..errors import ConfigError, InputFileError, PayloadError
 from ..io.files import atomic_outputs, check_writable
-from ..io.sidecar import SIDECAR_FORMAT, sidecar_path, write_json
+from ..io.sidecar import SIDECAR_FORMAT, sidecar_path, sidecar_payloads, sidecar_pilot_bits, write_json
 from ..io.wav import write_wav_blocks
 from .frame import Frame, build_frame, frame_sample_count, frame_waveform
 from .pilot import pilot_bits as _pilot_bits
@@ -285,7 +285,8 @@ def rebuild_from_sidecar(sidecar: dict[str, Any]) -> np.ndarray:
     """Rebuild the recording's samples (float64, before the WAV's sample format) from a sidecar alone."""
     config = FrameConfig.from_dict(sidecar["config"])
     schedule = BeaconSchedule(**sidecar["schedule"])
-    payloads = [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
-    bits = np.array([int(c) for c in sidecar["pilot"]["bits"]], dtype=np.uint8)
+    payloads, bits = sidecar_payloads(sidecar), sidecar_pilot_bits(sidecar)
+    if payloads is None or bits is None:
+        raise InputFileError("sidecar: lacks the payloads or pilot bits needed to rebuild the recording")
     signal = render_beacon(config, schedule, payloads, pilot_bits=bits)
     return np.concatenate(list(signal.blocks(scale=float(sidecar["recording"]["scale"]), progress=False)))
