@@ -284,11 +284,12 @@ class _FrameGrab:
 
 def receive(recording: Path, sidecar: dict, *, grab_frame: int | None = None):
     """Measure and decode every frame of ``recording``: (records, grabbed frame or None)."""
+    from .io.sidecar import sidecar_payloads
     from .receive import Emissions, receive_file
 
     config = FrameConfig.from_dict(sidecar["config"])
     times = np.array([f["t_emit_s"] for f in sidecar["frames"]])
-    payloads = [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
+    payloads = sidecar_payloads(sidecar)
     grab = _FrameGrab(grab_frame) if grab_frame is not None else None
     records = list(receive_file(recording, config, emissions=Emissions(times_s=times), progress=False,
                                 sound_speed_mps=float(sidecar["channel"]["sound_speed_mps"]),
@@ -622,23 +623,25 @@ def plot_psd(path, psd, config: FrameConfig) -> None:
 
 
 def plot_constellation(path, grabbed, config: FrameConfig, sidecar: dict) -> None:
-    """One frame's data symbols: after Doppler compensation (eq 10–11) and after the DFE."""
-    from .decode.frame import RECEIVER_DFE, decode_frame
-    from .receive.compensate import compensate_frame
+    """One frame's data symbols: after Doppler compensation (eq 10–11) and after the DFE.
+
+    The frame goes once more through the receiver's own decoding step
+    (:func:`seamodem.decode.frame.decode_received`, same speed, track and
+    equaliser sizing), so the picture is what the receiver decoded.
+    """
+    from .decode.frame import decode_received
+    from .io.sidecar import sidecar_pilot_bits
 
     m, bb, t0_s, fs = grabbed
-    bits = np.array([int(ch) for ch in sidecar["pilot"]["bits"]])
-    pilot = (1.0 - 2.0 * bits).astype(complex)
+    pilot = (1.0 - 2.0 * sidecar_pilot_bits(sidecar)).astype(complex)
     c = float(sidecar["channel"]["sound_speed_mps"])
-    v = m.v_tone_ml_mps if math.isfinite(m.v_tone_ml_mps) else m.pilot.v_mps
-    comp = compensate_frame(bb, fs, t0_s, config=config, pilot=pilot, t_start_s=m.pilot.t_start_s,
-                            sound_speed_mps=c, v_mps=v)
-    res = decode_frame(bb, fs, t0_s, comp, config, pilot, settings=RECEIVER_DFE, passes=1)
+    dec = decode_received(bb, fs, t0_s, config=config, pilot=pilot, t_start_s=m.pilot.t_start_s,
+                          v_mps=m.compensation_speed_mps,
+                          sound_speed_mps=c, passes=1, track_t_s=m.track_t_s, track_v_mps=m.track_v_mps)
     fig, axes = _figure(1, 2, figsize=(9, 4.5), constrained_layout=True)
-    data = comp.symbols[config.n_pilot:]
-    eq = res.dfe.soft[config.n_pilot:]
+    data = dec.compensated.symbols[config.n_pilot:]
     for ax, z, title in ((axes[0], data, "after Doppler compensation (eq 10–11)"),
-                         (axes[1], eq, f"after the DFE (output SNR {10 * np.log10(1 / res.dfe.noise_var):.1f} dB)")):
+                         (axes[1], dec.equalized, f"after the DFE (output SNR {dec.eq_snr_db:.1f} dB)")):
         ax.plot(z.real, z.imag, ".", ms=2, alpha=0.5)
         ax.set(xlabel="in-phase", ylabel="quadrature", title=title, aspect="equal", xlim=(-2, 2), ylim=(-2, 2))
         ax.grid(alpha=0.3)

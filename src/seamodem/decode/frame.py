@@ -11,7 +11,7 @@ from ..config import FrameConfig
 from .equalizer import DfeSettings
 from .turbo import TurboResult, turbo_equalize
 
-__all__ = ["fractional_samples", "decode_frame", "decode_received", "FrameDecode", "RECEIVER_DFE", "channel_span_symbols", "dfe_for_span"]
+__all__ = ["fractional_samples", "decode_frame", "decode_received", "FrameDecode", "channel_span_symbols", "dfe_for_span"]
 
 
 def fractional_samples(bb: np.ndarray, fs: float, t0_s: float, compensated, config: FrameConfig, sps: int = 2) -> np.ndarray:
@@ -71,11 +71,6 @@ def decode_frame(
     if settings is None:
         settings = dfe_for_span(channel_span_symbols(x, pilot, sps))
     return turbo_equalize(x, pilot, config, settings=settings, passes=passes)
-
-
-#: a long fixed equaliser: 20 symbols of feedforward span (4 before the cursor) and 24
-#: symbols of feedback, so that echoes up to 24 T = 3.75 ms (jmse2024) are cancelled
-RECEIVER_DFE = DfeSettings(n_ff=40, ff_centre=8, n_fb=24)
 
 
 def channel_span_symbols(x: np.ndarray, pilots: np.ndarray, sps: int, *, max_lag: int = 48, fraction: float = 0.25) -> int:
@@ -155,6 +150,8 @@ class FrameDecode:
         Bit error rate of the DFE's hard decisions before the decoder (NaN when unknown).
     compensated : CompensatedFrame
         The eq 10–11 symbols the decoder started from (for plots).
+    equalized : numpy.ndarray, complex, shape (n_data,)
+        The DFE's outputs over the data, before decisions (for plots).
     """
 
     payload: bytes
@@ -164,6 +161,7 @@ class FrameDecode:
     ber: float
     raw_ber: float
     compensated: object
+    equalized: np.ndarray
 
 
 def decode_received(
@@ -205,7 +203,7 @@ def decode_received(
         not the constant ``v_mps``.
     """
     from ..receive.compensate import compensate_frame
-    from ..transmit.coding import encode_payload, info_block
+    from ..transmit.coding import encode_info, info_block
     from ..transmit.modulation import symbols_to_bits
 
     if track_t_s is not None and len(track_t_s) >= 8:
@@ -229,7 +227,7 @@ def decode_received(
     if sent_payload is not None and len(sent_payload) <= config.capacity_bytes:
         sent_info = info_block(sent_payload, config)
         ber = float(np.mean(res.decoded.info_bits != sent_info))
-        sent_air = encode_payload(sent_payload, config)
+        sent_air = encode_info(sent_info, config)
         hard = symbols_to_bits(res.dfe.decisions[config.n_pilot :], config.modulation)[: sent_air.size]
         raw_ber = float(np.mean(hard != sent_air[: hard.size]))
     return FrameDecode(
@@ -240,4 +238,5 @@ def decode_received(
         ber=ber,
         raw_ber=raw_ber,
         compensated=comp,
+        equalized=res.dfe.soft[config.n_pilot :],
     )

@@ -125,6 +125,11 @@ class FrameMeasurement:
     track_v_mps: np.ndarray
     complete: bool
 
+    @property
+    def compensation_speed_mps(self) -> float:
+        """The mean speed decoding compensates with: the tone ML, else (no tone) the pilot bank's."""
+        return self.v_tone_ml_mps if math.isfinite(self.v_tone_ml_mps) else self.pilot.v_mps
+
 
 #: fewer tone samples than this (a frame cut by the recording's end) give no tone Doppler
 _MIN_TONE_SAMPLES = 16
@@ -369,7 +374,6 @@ class Receiver:
             return None
         from ..decode.frame import decode_received
 
-        v = m.v_tone_ml_mps if math.isfinite(m.v_tone_ml_mps) else m.pilot.v_mps
         sent = None
         if self.payloads is not None and 0 <= frame_index < len(self.payloads):
             sent = self.payloads[frame_index]
@@ -380,7 +384,7 @@ class Receiver:
             config=self.config,
             pilot=self.pilot,
             t_start_s=m.pilot.t_start_s,
-            v_mps=v,
+            v_mps=m.compensation_speed_mps,
             sound_speed_mps=self.sound_speed_mps,
             settings=self.dfe_settings,
             passes=self.turbo_passes,
