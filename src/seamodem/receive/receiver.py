@@ -393,7 +393,7 @@ class Receiver:
             track_v_mps=m.track_v_mps if self.follow_track else None,
         )
 
-    def _record(self, m: FrameMeasurement, bb=None, t0_s=0.0, fs=0.0) -> MeasurementRecord:
+    def _record(self, m: FrameMeasurement, bb: np.ndarray, t0_s: float, fs: float) -> MeasurementRecord:
         c = self.sound_speed_mps
         t_arr = m.pilot.t_start_s
         if self.turnaround_s is None:
@@ -422,7 +422,7 @@ class Receiver:
             sigma_v_r_bank_mps=float(pilot_velocity_crlb_mps(self.config, m.pilot.snr_db, sound_speed_mps=c)),
             tone_c_n0_dbhz=10 * math.log10(max(m.tone.c_n0_hz, 1e-30)),
             two_way=self.turnaround_s is not None,
-            **_payload_fields(self._decode(m, bb, t0_s, fs, int(k)) if bb is not None else None),
+            **_payload_fields(self._decode(m, bb, t0_s, fs, int(k))),
         )
 
     def run(self, blocks: Iterable[np.ndarray], *, fs: float) -> Iterator[MeasurementRecord]:
