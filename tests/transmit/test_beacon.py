@@ -5,7 +5,7 @@ import pytest
 import soundfile
 
 from seamodem import get_preset
-from seamodem.errors import ConfigError, PayloadError
+from seamodem.errors import ConfigError, InputFileError, PayloadError
 from seamodem.io.sidecar import read_sidecar
 from seamodem.transmit.beacon import (
     BeaconSchedule,
@@ -31,6 +31,17 @@ def test_sidecar_alone_rebuilds_the_exact_recording(tmp_path):
     np.testing.assert_array_equal(rebuilt.astype(np.float32), x)
     assert [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]] == payloads
     assert np.max(np.abs(x)) == pytest.approx(0.5, rel=1e-6)
+
+
+@pytest.mark.parametrize("damage", ["payload", "bits"])
+def test_rebuild_needs_the_payloads_and_the_pilot(tmp_path, damage):
+    sc = write_beacon(tmp_path / "b.wav", CFG, BeaconSchedule(count=2, period_s=0.5), [b"a", b"b"])
+    if damage == "payload":
+        del sc["frames"][1]["payload_hex"]
+    else:
+        sc["pilot"]["bits"] = "01x"
+    with pytest.raises(InputFileError, match="lacks the payloads or pilot bits"):
+        rebuild_from_sidecar(sc)
 
 
 def test_pcm16_scaling_recorded(tmp_path):
