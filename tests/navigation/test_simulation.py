@@ -63,6 +63,8 @@ def test_slant_to_horizontal_and_geodetic():
     assert slant_to_horizontal(5.0, 10.0, 6.0) == pytest.approx(3.0)  # 3-4-5 triangle
     assert slant_to_horizontal(1.0, 10.0, 0.0) == 0.0  # shorter than the depth difference
     east, north = geodetic_to_local(48.39243, -4.407295, 48.38243, -4.407295)
-    assert north == pytest.approx(6378137.0 * np.radians(0.01)) and east == 0.0
+    # WGS-84 meridian arc M(φ)·Δφ at the mean latitude (was the sphere's a·Δφ = 1113.19 m before issue 12);
+    # east is 0 up to the float64 rounding of Earth-centred coordinates (~1e-9 m).
+    assert north == pytest.approx(1111.97854, abs=1e-4) and east == pytest.approx(0.0, abs=1e-9)
     lat, lon = local_to_geodetic(*geodetic_to_local(48.4, -4.3, 48.38243, -4.407295), 48.38243, -4.407295)
     assert lat == pytest.approx(48.4, abs=1e-12) and lon == pytest.approx(-4.3, abs=1e-12)
