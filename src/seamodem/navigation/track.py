@@ -10,9 +10,7 @@ columns can feed it.
 from __future__ import annotations
 
 import csv
-import io
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +19,7 @@ from ..errors import ConfigError, InputFileError
 from ..io.files import atomic_outputs, check_writable
 from .ekf import ExtendedKalmanFilter
 from .geometry import geodetic_to_local, local_to_geodetic, slant_to_horizontal
+from .logs import parse_pair as _pair, read_columns
 from .models import Auv6Model
 from .smoother import rts_smooth
 
@@ -32,66 +31,6 @@ TRUTH_COLUMNS = ("t_s", "x_m", "y_m")
 
 #: Paper 000 eq 25, by component.
 EQ25_R = {"range": 12.0, "v_r": 0.2, "psi": 1.0, "omega": 0.005, "a": 0.005}
-
-
-def read_columns(path, required, *, optional=(), time_column=None, what="file") -> dict[str, np.ndarray]:
-    """Read named float columns of a CSV; one-line errors for every defect.
-
-    Raises
-    ------
-    InputFileError
-        Missing or empty file, missing columns, non-numeric or NaN values, or
-        (for ``time_column``) times that are not strictly increasing.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise InputFileError(f"{what} not found: {path}")
-    lines = [line for line in path.read_text(encoding="utf-8", errors="replace").splitlines()
-             if line.strip() and not line.lstrip().startswith("#")]
-    if len(lines) < 2:
-        raise InputFileError(f"{what} {path}: no data rows (need a header line and at least one row)")
-    reader = csv.reader(io.StringIO("\n".join(lines)))
-    header = [h.strip() for h in next(reader)]
-    missing = [c for c in required if c not in header]
-    if missing:
-        raise InputFileError(f"{what} {path}: missing column(s) {', '.join(missing)} (has: {', '.join(header)})")
-    wanted = list(required) + [c for c in optional if c in header]
-    index = {c: header.index(c) for c in wanted}
-    rows = list(reader)
-    data = {c: np.empty(len(rows)) for c in wanted}
-    for r, row in enumerate(rows, start=2):
-        for c, i in index.items():
-            try:
-                data[c][r - 2] = float(row[i])
-            except (ValueError, IndexError):
-                value = row[i] if i < len(row) else "<missing>"
-                raise InputFileError(f"{what} {path}: row {r}, column {c}: not a number ({value!r})") from None
-    for c in wanted:
-        bad = np.flatnonzero(~np.isfinite(data[c]))
-        if bad.size:
-            raise InputFileError(f"{what} {path}: column {c} has {bad.size} NaN/inf value(s), first at data row {bad[0] + 1}")
-    if time_column is not None:
-        t = data[time_column]
-        steps = np.diff(t)
-        if np.any(steps == 0):
-            k = int(np.flatnonzero(steps == 0)[0])
-            raise InputFileError(f"{what} {path}: duplicate time {time_column} = {t[k]!r} at data rows {k + 1} and {k + 2}")
-        if np.any(steps < 0):
-            k = int(np.flatnonzero(steps < 0)[0])
-            raise InputFileError(f"{what} {path}: {time_column} not sorted (row {k + 2}: {t[k + 1]!r} after {t[k]!r})")
-    return data
-
-
-def _pair(text, parameter):
-    if text is None:
-        raise ConfigError(parameter, "is required (two numbers, e.g. 50,100)")
-    try:
-        a, b = (float(v) for v in str(text).split(","))
-    except ValueError:
-        raise ConfigError(parameter, f"must be two numbers separated by a comma, got {text!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b)):
-        raise ConfigError(parameter, f"must be finite, got {text!r}")
-    return a, b
 
 
 def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0, filter="proposed",
