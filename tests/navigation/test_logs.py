@@ -69,6 +69,12 @@ def test_imu_at_irregular_times_reads_silently(tmp_path):
     assert set(data) == set(IMU_HEADER)
 
 
+def test_imu_with_a_byte_order_mark_reads(tmp_path):
+    path = tmp_path / "imu.csv"
+    path.write_bytes("\ufefft_s,heading_rad,omega_rad_s,accel_mps2\n0,1,2,3\n".encode("utf-8"))  # as Excel saves UTF-8
+    assert no_warnings(read_imu, path)["accel_mps2"].tolist() == [3.0]
+
+
 def test_imu_unsorted_is_sorted_with_the_count_of_rows_moved(tmp_path):
     t = np.arange(10) * 0.25
     rows = imu_rows(t)

@@ -70,7 +70,7 @@ def _read_table(path, what: str):
     path = Path(path)
     if not path.is_file():
         raise InputFileError(f"{what} not found: {path}")
-    text = path.read_text(encoding="utf-8", errors="replace")
+    text = path.read_text(encoding="utf-8-sig", errors="replace")  # -sig: a spreadsheet's byte-order mark
     lines = text.splitlines(keepends=True)
     comments, k = [], 0
     while k < len(lines) and (not lines[k].strip() or lines[k].lstrip().startswith("#")):
