@@ -1,0 +1,117 @@
+"""Compiled mission loop with the inertial filter in the loop (the controller can steer on its estimate).
+
+The vehicle, the controller and the sensors are paper 000's simulation exactly
+as in :func:`seamodem.navigation._kernels.mission_kernel`, fed by the same
+standard normals (common random numbers with the paper's filters), plus two
+truths that kernel does not have: a water current and a range scale (a sound
+speed error). The filter is :mod:`.inertial`'s, step for step the same kernels
+as :func:`~seamodem.navigation.inertial.filter_nodes`: the tests hold the
+estimate equal to a filter pass over the recorded sensor streams.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .inertial import _motion, _propagate_cov, _update_acoustic, _update_heading
+from .vehicle import feedback_command, vehicle_step
+
+
+@njit(cache=True, nogil=True)
+def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beacon, dt, com_every, use_vr,
+                            steer_on_estimate, v_min, v_max, omega_max, accel_max, current, range_scale, bias_rate,
+                            z0, P0, lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations,
+                            second_order, sensors):
+    """Run one mission; return error (n+1,), estimate (n+1, 2), truth (n+1, 2), status (n+1,), nis (n+1,).
+
+    Parameters (beyond :func:`~seamodem.navigation._kernels.mission_kernel`'s)
+    -----------------------------------------------------------------------
+    start_offsets : (4,) filter start minus true start in x, y [m] and speed [m/s], and the true initial
+        heading bias [rad]
+    current : (2,) true water current [m/s]; range_scale : true range and v_r scale − 1
+    bias_rate : true heading-bias drift rate [rad/s] (added to the random walk of ``sigmas[3]``)
+    z0, P0 : filter start (the position, speed and bias parts; the heading is set from the step-0 reading)
+    lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations : the filter (see ``inertial``)
+    sensors : (n + 1, 5) output: heading, gyro, accelerometer readings, range and v_r (NaN without a frame)
+    """
+    n = reference.shape[0] - 1
+    m = z0.shape[0]
+    error = np.empty(n + 1)
+    estimate = np.empty((n + 1, 2))
+    truth = np.empty((n + 1, 2))
+    status = np.zeros(n + 1, dtype=np.int8)
+    nis_out = np.full(n + 1, np.nan)
+    z = z0.copy()
+    P = P0.copy()
+    zp = np.empty(m)
+    F = np.empty((m, m))
+    A = np.empty((m, m))
+    Pp = np.empty((m, m))
+    ph = np.empty(m)
+    work = np.empty((5, m))
+    Hw = np.zeros((2, m))
+    meas = np.empty(2)
+    x, y, psi, v = start[0], start[1], start[2], start[3]
+    z[0] = x + start_offsets[0]
+    z[1] = y + start_offsets[1]
+    z[3] = v + start_offsets[2]
+    bias = start_offsets[3]
+    heading0 = psi + bias + sigmas[0] * noise[0, 0]
+    z[2] = heading0 - z[4]  # P0 is the prior after this reading (InertialConfig.initial)
+    sensors[0, 0] = heading0
+    sensors[0, 1] = sensors[0, 2] = 0.0
+    sensors[0, 3] = sensors[0, 4] = np.nan
+    estimate[0, 0], estimate[0, 1] = z[0], z[1]
+    truth[0, 0], truth[0, 1] = x, y
+    error[0] = np.sqrt((z[0] - x) ** 2 + (z[1] - y) ** 2)
+    gated_run = 0
+    scale = 1.0 + range_scale
+    sx, sy, spsi, sv = (z[0], z[1], z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
+    omega, accel = feedback_command(sx, sy, spsi, sv, reference[0, 0], reference[0, 1], reference[0, 2],
+                                    reference[0, 3], reference[0, 4], reference[0, 5], v_min, omega_max, accel_max)
+    for k in range(1, n + 1):
+        v_old = v
+        x, y, psi, v = vehicle_step(x, y, psi, v, omega, accel, dt, v_min, v_max)
+        x += current[0] * dt
+        y += current[1] * dt
+        accel_true = (v - v_old) / dt
+        bias += sigmas[3] * noise[k, 3] + bias_rate * dt
+        head_m = psi + bias + sigmas[0] * noise[k, 0]
+        omega_m = omega + sigmas[1] * noise[k, 1]
+        accel_m = accel_true + sigmas[2] * noise[k, 2]
+        sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
+        sensors[k, 3] = sensors[k, 4] = np.nan
+        _motion(z, lay, omega_m, accel_m, dt, zp, F)
+        _propagate_cov(P, F, qd, dt, A, Pp)
+        for a in range(m):
+            z[a] = zp[a]
+            for b in range(m):
+                P[a, b] = Pp[a, b]
+        if k % com_every == 0:
+            dx, dy = x - beacon[0], y - beacon[1]
+            d_true = np.sqrt(dx * dx + dy * dy)
+            gx, gy = v * np.cos(psi) + current[0], v * np.sin(psi) + current[1]
+            vr_true = -(dx * gx + dy * gy) / d_true
+            meas[0] = scale * d_true + sigmas[4] * noise[k, 4]
+            meas[1] = scale * vr_true + sigmas[5] * noise[k, 5]
+            sensors[k, 3], sensors[k, 4] = meas[0], meas[1]
+            force = gated_run >= gate_reset_after
+            nis, ok = _update_acoustic(z, P, lay, beacon, meas, meas_var, True, use_vr, gate, iterations, force,
+                                       work, Hw, second_order)
+            nis_out[k] = nis
+            if ok:
+                status[k] = 3 if (force and nis > gate) else 1
+                gated_run = 0
+            else:
+                status[k] = 2
+                gated_run += 1
+        _update_heading(z, P, head_m, heading_var, ph)
+        estimate[k, 0], estimate[k, 1] = z[0], z[1]
+        truth[k, 0], truth[k, 1] = x, y
+        error[k] = np.sqrt((z[0] - x) ** 2 + (z[1] - y) ** 2)
+        sx, sy, spsi, sv = (z[0], z[1], z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
+        omega, accel = feedback_command(sx, sy, spsi, sv, reference[k, 0], reference[k, 1], reference[k, 2],
+                                        reference[k, 3], reference[k, 4], reference[k, 5], v_min, omega_max,
+                                        accel_max)
+    return error, estimate, truth, status, nis_out

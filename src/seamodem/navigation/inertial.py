@@ -1,0 +1,750 @@
+"""The inertial beacon filter: IMU-driven dead reckoning, heading bias as a state, gated acoustic fixes.
+
+Paper 000's filter treats the gyro and the accelerometer as *measurements* of
+states (Ω, a) with a near-zero process noise (Q = Δt⁸), and the heading sensor
+as unbiased. Told how good centimetre ranges are, it diverges (docs/navigation.md).
+This filter is built the other way round, as navigation filters with an IMU are:
+
+- the gyro and the accelerometer are *inputs* of the motion model, and the
+  process noise is their stated noise density times the time step (a random
+  walk in heading and speed), not a tuning constant;
+- the heading sensor (AHRS, compass) measures ψ + b, with the bias b (and
+  optionally its drift rate ḃ) in the state: paper 000 §5 names the heading
+  (bearing) error as the dominant limit, and only the acoustic measurements can
+  observe it;
+- optionally a water current (c_x, c_y) [m/s] and a range scale s (a sound-speed
+  error: range and v_r are both multiplied by 1 + s);
+- the acoustic update (range, and v_r unless range-only) is an *iterated* EKF
+  (Gauss–Newton on the posterior): with σ_d = 1 mm and a position prior of
+  metres, one linearization of the range is off by more than the noise;
+- every acoustic update is gated on its normalised innovation squared (χ² with
+  1 or 2 degrees of freedom); a gated frame is reported, not silently used, and
+  after ``gate_reset_after`` frames gated in a row the next one is accepted (a
+  filter that has lost itself must not reject the truth for ever).
+
+State layout: (x, y, ψ, v, b) always, then ḃ, (c_x, c_y), s when enabled
+(:class:`InertialConfig`). Positions in the local east-north frame [m],
+heading counter-clockwise from east [rad], v_r the closing speed (SPEC §1).
+
+The numerical core is a set of small numba kernels working on *nodes*: the
+sorted union of the IMU sample times and the frame arrival times. From node
+i − 1 to node i the state moves with the rates of the first IMU sample at or
+after node i (the sample that covers that interval); a heading measurement and
+an acoustic measurement may sit on any node. The filter, the batch smoother and
+the fixed-lag smoother (:mod:`.smoothing`) share them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numba import njit
+
+from ..errors import ConfigError
+
+__all__ = [
+    "InertialConfig",
+    "Nodes",
+    "FilterRun",
+    "build_nodes",
+    "add_fixes",
+    "run_filter",
+    "state_names",
+    "CHI2_GATE",
+]
+
+#: χ² quantiles for the gate: probability → (1 dof, 2 dof). Computed with scipy.stats.chi2.ppf,
+#: tabulated so that importing the filter does not import scipy.stats.
+CHI2_GATE = {
+    0.99: (6.634896601021214, 9.210340371976180),
+    0.999: (10.827566170662733, 13.815510557964274),
+    0.9999: (15.136705226623606, 18.420680743952364),
+    0.99999: (19.511420964666268, 23.025850929940457),
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class InertialConfig:
+    """Sensor noise, optional states, gating and initial uncertainty of the inertial filter.
+
+    Noise *densities* make the filter independent of the IMU rate: over a step
+    Δt the heading gains variance ``gyro_arw² · Δt``, the speed
+    ``accel_vrw² · Δt``. For white samples of standard deviation σ at a period
+    T_s the density is σ·√T_s (e.g. the paper's gyro, σ = 0.0707 rad/s at
+    0.25 s: 0.0354 rad/√s). :meth:`from_noise_model` does that conversion.
+
+    Parameters
+    ----------
+    gyro_arw : float
+        Gyro angle random walk [rad/√s].
+    accel_vrw : float
+        Accelerometer velocity random walk [m/s/√s].
+    heading_sigma_rad : float
+        White noise of the heading sensor [rad] (paper 000 §3.5.3: 0.1–2°).
+    bias_rw : float
+        Heading-bias random walk [rad/√s] (5°/h after one hour: 0.0873/60 = 1.45e-3).
+    bias_drift_rw : float
+        Random walk of the bias drift rate [rad/s/√s] (only with ``estimate_bias_drift``).
+    position_rw : float
+        Position random walk [m/√s]: what the unicycle model misses (side slip,
+        discretization); 0 is exact for the simulator.
+    estimate_bias_drift : bool
+        Carry the bias drift rate ḃ as a state.
+    estimate_current : bool
+        Carry a water current (c_x, c_y) [m/s] as two states.
+    current_rw : float
+        Random walk of the current [m/s/√s].
+    estimate_range_scale : bool
+        Carry a range scale s (sound-speed error) as a state.
+    p0_position_m, p0_heading_rad, p0_speed_mps, p0_bias_rad, p0_bias_drift_rad_s, p0_current_mps, p0_scale :
+        Initial standard deviations. ``p0_heading_rad`` adds to the heading sensor's own noise and bias when the
+        start heading comes from the sensor.
+    gate_probability : float or None
+        Probability of the χ² gate on an acoustic update (one of :data:`CHI2_GATE`); ``None`` disables gating.
+    gate_reset_after : int
+        After this many consecutive gated frames the next frame is accepted.
+    iterations : int
+        Gauss–Newton iterations of the acoustic update (1 = plain EKF).
+    """
+
+    gyro_arw: float = math.sqrt(0.005) * math.sqrt(0.25)
+    accel_vrw: float = math.sqrt(0.005) * math.sqrt(0.25)
+    heading_sigma_rad: float = math.radians(1.0)
+    bias_rw: float = math.radians(5.0) / 60.0
+    bias_drift_rw: float = 1e-7
+    position_rw: float = 0.0
+    estimate_bias_drift: bool = False
+    estimate_current: bool = False
+    current_rw: float = 1e-4
+    estimate_range_scale: bool = False
+    p0_position_m: float = 1.0
+    p0_heading_rad: float = math.radians(2.0)
+    p0_speed_mps: float = 0.2
+    p0_bias_rad: float = math.radians(2.0)
+    p0_bias_drift_rad_s: float = math.radians(5.0) / 3600.0
+    p0_current_mps: float = 0.2
+    p0_scale: float = 0.01
+    gate_probability: float | None = 0.9999
+    gate_reset_after: int = 3
+    iterations: int = 1
+    second_order: bool = True
+
+    def __post_init__(self):
+        for name in ("gyro_arw", "accel_vrw", "heading_sigma_rad", "bias_rw", "bias_drift_rw", "position_rw",
+                     "current_rw"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ConfigError(name, f"must be finite and >= 0, got {value!r}")
+        for name in ("p0_position_m", "p0_heading_rad", "p0_speed_mps", "p0_bias_rad", "p0_bias_drift_rad_s",
+                     "p0_current_mps", "p0_scale"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ConfigError(name, f"must be finite and > 0, got {value!r}")
+        if self.heading_sigma_rad <= 0:
+            raise ConfigError("heading_sigma_rad", f"must be > 0 rad, got {self.heading_sigma_rad!r}")
+        if self.gate_probability is not None and self.gate_probability not in CHI2_GATE:
+            raise ConfigError("gate_probability", f"must be one of {sorted(CHI2_GATE)} or None, "
+                                                  f"got {self.gate_probability!r}")
+        if not (isinstance(self.gate_reset_after, int) and self.gate_reset_after >= 1):
+            raise ConfigError("gate_reset_after", f"must be an integer >= 1, got {self.gate_reset_after!r}")
+        if not (isinstance(self.iterations, int) and 1 <= self.iterations <= 50):
+            raise ConfigError("iterations", f"must be an integer in [1, 50], got {self.iterations!r}")
+
+    @classmethod
+    def from_noise_model(cls, noise, dt_s: float, **overrides) -> "InertialConfig":
+        """Densities from the per-sample standard deviations of a :class:`~.montecarlo.NoiseModel` at step ``dt_s``."""
+        root = math.sqrt(dt_s)
+        values = dict(gyro_arw=noise.sigma_omega_rad_s * root, accel_vrw=noise.sigma_accel_mps2 * root,
+                      heading_sigma_rad=max(math.radians(noise.sigma_heading_deg), 1e-9),
+                      bias_rw=math.radians(noise.heading_drift_deg_per_h) / 60.0)
+        values.update(overrides)
+        return cls(**values)
+
+    # --- layout -----------------------------------------------------------------------------------------
+    @property
+    def layout(self) -> np.ndarray:
+        """Indices of the optional states (ḃ, c_x, s), −1 when absent; c_y follows c_x."""
+        i = 5
+        idx = [-1, -1, -1]
+        if self.estimate_bias_drift:
+            idx[0], i = i, i + 1
+        if self.estimate_current:
+            idx[1], i = i, i + 2
+        if self.estimate_range_scale:
+            idx[2], i = i, i + 1
+        return np.array(idx, dtype=np.int64)
+
+    @property
+    def n_states(self) -> int:
+        return 5 + self.estimate_bias_drift + 2 * self.estimate_current + self.estimate_range_scale
+
+    @property
+    def process_density(self) -> np.ndarray:
+        """Diagonal process noise density per second, in state order."""
+        q = [self.position_rw**2, self.position_rw**2, self.gyro_arw**2, self.accel_vrw**2, self.bias_rw**2]
+        if self.estimate_bias_drift:
+            q.append(self.bias_drift_rw**2)
+        if self.estimate_current:
+            q += [self.current_rw**2] * 2
+        if self.estimate_range_scale:
+            q.append(0.0)
+        return np.array(q)
+
+    def initial(self, x_m, y_m, heading_rad, speed_mps, *, heading_from_sensor: bool = True):
+        """Initial state and covariance at a start fix.
+
+        ``heading_rad`` is the sensor's reading (ψ + b) when ``heading_from_sensor``: the start heading then
+        also carries the bias uncertainty, correlated with it.
+        """
+        n = self.n_states
+        z = np.zeros(n)
+        z[:4] = x_m, y_m, heading_rad, speed_mps
+        P = np.zeros((n, n))
+        P[0, 0] = P[1, 1] = self.p0_position_m**2
+        P[3, 3] = self.p0_speed_mps**2
+        P[4, 4] = self.p0_bias_rad**2
+        if heading_from_sensor:
+            # ψ = reading − b − noise: var = p0_b² + σ_h², cov(ψ, b) = −p0_b²
+            P[2, 2] = self.p0_bias_rad**2 + self.heading_sigma_rad**2
+            P[2, 4] = P[4, 2] = -self.p0_bias_rad**2
+        else:
+            P[2, 2] = self.p0_heading_rad**2
+        lay = self.layout
+        if lay[0] >= 0:
+            P[lay[0], lay[0]] = self.p0_bias_drift_rad_s**2
+        if lay[1] >= 0:
+            P[lay[1], lay[1]] = P[lay[1] + 1, lay[1] + 1] = self.p0_current_mps**2
+        if lay[2] >= 0:
+            P[lay[2], lay[2]] = self.p0_scale**2
+        return z, P
+
+    @property
+    def gate(self) -> tuple[float, float]:
+        """χ² thresholds (1 dof, 2 dof); infinite without gating."""
+        if self.gate_probability is None:
+            return math.inf, math.inf
+        return CHI2_GATE[self.gate_probability]
+
+
+def state_names(config: InertialConfig) -> tuple[str, ...]:
+    """Names of the state components in order (``x, y, psi, v, bias`` and the options)."""
+    names = ["x", "y", "psi", "v", "bias"]
+    if config.estimate_bias_drift:
+        names.append("bias_rate")
+    if config.estimate_current:
+        names += ["current_x", "current_y"]
+    if config.estimate_range_scale:
+        names.append("range_scale")
+    return tuple(names)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# numba kernels
+# ---------------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True, nogil=True)
+def _motion(z, lay, omega, accel, dt, z_out, F):
+    """z_out = f(z) over dt with the IMU rates; F = ∂f/∂z (identity plus the couplings)."""
+    n = z.shape[0]
+    x, y, psi, v = z[0], z[1], z[2], z[3]
+    c, s = np.cos(psi), np.sin(psi)
+    cx = z[lay[1]] if lay[1] >= 0 else 0.0
+    cy = z[lay[1] + 1] if lay[1] >= 0 else 0.0
+    for i in range(n):
+        z_out[i] = z[i]
+        for j in range(n):
+            F[i, j] = 1.0 if i == j else 0.0
+    z_out[0] = x + (v * c + cx) * dt
+    z_out[1] = y + (v * s + cy) * dt
+    z_out[2] = psi + omega * dt
+    z_out[3] = v + accel * dt
+    F[0, 2], F[0, 3] = -v * dt * s, dt * c
+    F[1, 2], F[1, 3] = v * dt * c, dt * s
+    if lay[0] >= 0:
+        z_out[4] = z[4] + z[lay[0]] * dt
+        F[4, lay[0]] = dt
+    if lay[1] >= 0:
+        F[0, lay[1]] = dt
+        F[1, lay[1] + 1] = dt
+
+
+@njit(cache=True, nogil=True)
+def _propagate_cov(P, F, qd, dt, A, P_out):
+    """P_out = F P Fᵀ + diag(qd)·dt."""
+    n = P.shape[0]
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += F[i, k] * P[k, j]
+            A[i, j] = acc
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                acc += A[i, k] * F[j, k]
+            P_out[i, j] = acc
+            P_out[j, i] = acc
+        P_out[i, i] += qd[i] * dt
+
+
+@njit(cache=True, nogil=True)
+def _wrap(angle):
+    return np.arctan2(np.sin(angle), np.cos(angle))
+
+
+@njit(cache=True, nogil=True)
+def _acoustic_model(z, lay, beacon, use_range, use_vr, h, H):
+    """Predicted (range, v_r) rows and their Jacobian at z; returns the number of rows."""
+    n = z.shape[0]
+    dx, dy = z[0] - beacon[0], z[1] - beacon[1]
+    r = np.sqrt(dx * dx + dy * dy)
+    r = max(r, 1e-6)
+    ux, uy = dx / r, dy / r
+    psi, v = z[2], z[3]
+    c, s = np.cos(psi), np.sin(psi)
+    cx = z[lay[1]] if lay[1] >= 0 else 0.0
+    cy = z[lay[1] + 1] if lay[1] >= 0 else 0.0
+    k = 1.0 + (z[lay[2]] if lay[2] >= 0 else 0.0)
+    rows = 0
+    for i in range(2):
+        for j in range(n):
+            H[i, j] = 0.0
+    if use_range:
+        h[rows] = k * r
+        H[rows, 0], H[rows, 1] = k * ux, k * uy
+        if lay[2] >= 0:
+            H[rows, lay[2]] = r
+        rows += 1
+    if use_vr:
+        gx, gy = v * c + cx, v * s + cy
+        ug = ux * gx + uy * gy
+        h[rows] = -k * ug
+        H[rows, 0] = -k * (gx - ug * ux) / r
+        H[rows, 1] = -k * (gy - ug * uy) / r
+        H[rows, 2] = -k * (-ux * v * s + uy * v * c)
+        H[rows, 3] = -k * (ux * c + uy * s)
+        if lay[1] >= 0:
+            H[rows, lay[1]] = -k * ux
+            H[rows, lay[1] + 1] = -k * uy
+        if lay[2] >= 0:
+            H[rows, lay[2]] = -ug
+        rows += 1
+    return rows
+
+
+@njit(cache=True, nogil=True)
+def _update_heading(z, P, heading, var, ph):
+    """Scalar update with ψ_meas = ψ + b; returns the NIS."""
+    n = z.shape[0]
+    nu = _wrap(heading - z[2] - z[4])
+    for i in range(n):
+        ph[i] = P[i, 2] + P[i, 4]
+    s = ph[2] + ph[4] + var
+    for i in range(n):
+        z[i] += ph[i] / s * nu
+    for i in range(n):
+        for j in range(n):
+            P[i, j] -= ph[i] * ph[j] / s
+    return nu * nu / s
+
+
+@njit(cache=True, nogil=True)
+def _update_position(z, P, fix, var, ph):
+    """Two scalar updates with a position fix (x, y) of variance ``var`` each (GNSS at the surface)."""
+    n = z.shape[0]
+    for axis in range(2):
+        nu = fix[axis] - z[axis]
+        for i in range(n):
+            ph[i] = P[i, axis]
+        s = ph[axis] + var
+        for i in range(n):
+            z[i] += ph[i] / s * nu
+        for i in range(n):
+            for j in range(n):
+                P[i, j] -= ph[i] * ph[j] / s
+
+
+@njit(cache=True, nogil=True)
+def _update_acoustic(z, P, lay, beacon, meas, var, use_range, use_vr, gate, iterations, force, work, Hw,
+                     second_order):
+    """Iterated EKF update with (range, v_r); returns (NIS at the prior, accepted).
+
+    ``meas`` = (d, v_r), ``var`` their variances. The NIS is computed with the
+    prior linearization; above ``gate`` the state is left unchanged unless
+    ``force``. Gauss–Newton: z_{i+1} = z⁻ + K_i (y − h(z_i) − H_i (z⁻ − z_i)).
+    """
+    n = z.shape[0]
+    z_prior = work[0]
+    zi = work[1]
+    h = work[2]
+    PHt0 = work[3]
+    PHt1 = work[4]
+    for i in range(n):
+        z_prior[i] = z[i]
+        zi[i] = z[i]
+    nis = 0.0
+    s00 = s01 = s11 = 0.0
+    rows = 0
+    var2 = 0.0
+    for it in range(iterations):
+        rows = _acoustic_model(zi, lay, beacon, use_range, use_vr, h, Hw)
+        # innovation of the linearized model about zi, evaluated for the prior
+        nu0 = 0.0
+        nu1 = 0.0
+        # second-order term of the range (Hessian (I − uuᵀ)/r in x, y): the prior's spread across the
+        # line of sight lengthens the expected range by σ_t²/(2r) and adds (σ_t²/r)²/2 to its variance
+        dx, dy = zi[0] - beacon[0], zi[1] - beacon[1]
+        rr = max(np.sqrt(dx * dx + dy * dy), 1e-6)
+        tx, ty = -dy / rr, dx / rr
+        st2 = tx * tx * P[0, 0] + 2.0 * tx * ty * P[0, 1] + ty * ty * P[1, 1]
+        k_scale = 1.0 + (zi[lay[2]] if lay[2] >= 0 else 0.0)
+        bias2 = k_scale * st2 / (2.0 * rr) if second_order else 0.0
+        var2 = 0.5 * (k_scale * st2 / rr) ** 2 if second_order else 0.0
+        for r in range(rows):
+            target = meas[0] if (use_range and r == 0) else meas[1]
+            acc = target - h[r]
+            if use_range and r == 0:
+                acc -= bias2
+            for j in range(n):
+                acc -= Hw[r, j] * (z_prior[j] - zi[j])
+            if r == 0:
+                nu0 = acc
+            else:
+                nu1 = acc
+        for i in range(n):
+            a0 = 0.0
+            a1 = 0.0
+            for j in range(n):
+                a0 += P[i, j] * Hw[0, j]
+                if rows > 1:
+                    a1 += P[i, j] * Hw[1, j]
+            PHt0[i] = a0
+            PHt1[i] = a1
+        v0 = var[0] + var2 if use_range else var[1]
+        s00 = v0
+        s01 = 0.0
+        s11 = var[1]
+        for j in range(n):
+            s00 += Hw[0, j] * PHt0[j]
+            if rows > 1:
+                s01 += Hw[0, j] * PHt1[j]
+                s11 += Hw[1, j] * PHt1[j]
+        if rows > 1:
+            det = s00 * s11 - s01 * s01
+            i00, i01, i11 = s11 / det, -s01 / det, s00 / det
+            w0 = i00 * nu0 + i01 * nu1
+            w1 = i01 * nu0 + i11 * nu1
+            if it == 0:
+                nis = nu0 * w0 + nu1 * w1
+        else:
+            w0 = nu0 / s00
+            w1 = 0.0
+            if it == 0:
+                nis = nu0 * w0
+        if it == 0 and nis > gate and not force:
+            return nis, False
+        step = 0.0
+        for i in range(n):
+            new = z_prior[i] + PHt0[i] * w0 + PHt1[i] * w1
+            step = max(step, abs(new - zi[i]))
+            zi[i] = new
+        if step < 1e-10:
+            break
+    # covariance with the last linearization: P − PHᵀ S⁻¹ H P
+    rows = _acoustic_model(zi, lay, beacon, use_range, use_vr, h, Hw)
+    for i in range(n):
+        a0 = 0.0
+        a1 = 0.0
+        for j in range(n):
+            a0 += P[i, j] * Hw[0, j]
+            if rows > 1:
+                a1 += P[i, j] * Hw[1, j]
+        PHt0[i] = a0
+        PHt1[i] = a1
+    v0 = var[0] + var2 if use_range else var[1]
+    s00 = v0
+    s01 = 0.0
+    s11 = var[1]
+    for j in range(n):
+        s00 += Hw[0, j] * PHt0[j]
+        if rows > 1:
+            s01 += Hw[0, j] * PHt1[j]
+            s11 += Hw[1, j] * PHt1[j]
+    if rows > 1:
+        det = s00 * s11 - s01 * s01
+        i00, i01, i11 = s11 / det, -s01 / det, s00 / det
+    else:
+        i00, i01, i11 = 1.0 / s00, 0.0, 0.0
+    for i in range(n):
+        for j in range(n):
+            P[i, j] -= (PHt0[i] * (i00 * PHt0[j] + i01 * PHt1[j]) + PHt1[i] * (i01 * PHt0[j] + i11 * PHt1[j]))
+    for i in range(n):
+        z[i] = zi[i]
+        for j in range(i + 1, n):
+            m = 0.5 * (P[i, j] + P[j, i])
+            P[i, j] = m
+            P[j, i] = m
+    return nis, True
+
+
+@njit(cache=True, nogil=True)
+def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var, has_acoustic,
+                 meas, meas_var, use_range, use_vr, gate, gate_reset_after, iterations, second_order, has_fix, fix,
+                 fix_var, history):
+    """Run the filter over nodes; fill the posterior states and covariances.
+
+    Parameters
+    ----------
+    z0, P0 : initial state (n,) and covariance (n, n) at node 0 (before node 0's measurements)
+    dt, omega, accel : (N,) step from node i − 1 to i and its IMU rates (dt[0] ignored)
+    has_heading, heading, heading_var : (N,) heading measurement per node
+    has_acoustic, meas, meas_var : (N,), (N, 2), (N, 2) acoustic (range, v_r) per node
+    has_fix, fix, fix_var : (N,), (N, 2), (N,) position fixes (GNSS at the surface) per node
+    history : (N, n, 3n + 1) work output: ``[:, :, 0]`` prior state, ``[:, :, 1:n+1]`` prior covariance,
+        ``[:, :, n+1:2n+1]`` posterior covariance, ``[:, :, 2n+1:3n+1]`` F from node i − 1 to i
+
+    Returns
+    -------
+    states : (N, n) posterior states
+    nis : (N,) NIS of each acoustic node (NaN elsewhere)
+    status : (N,) 0 no frame, 1 accepted, 2 gated, 3 accepted after ``gate_reset_after`` gates in a row
+    """
+    N = dt.shape[0]
+    n = z0.shape[0]
+    z = z0.copy()
+    P = P0.copy()
+    zp = np.empty(n)
+    F = np.empty((n, n))
+    A = np.empty((n, n))
+    Pp = np.empty((n, n))
+    ph = np.empty(n)
+    work = np.empty((5, n))
+    Hw = np.zeros((2, n))
+    states = np.empty((N, n))
+    nis_out = np.full(N, np.nan)
+    status = np.zeros(N, dtype=np.int8)
+    gated_run = 0
+    for i in range(N):
+        if i > 0:
+            _motion(z, lay, omega[i], accel[i], dt[i], zp, F)
+            _propagate_cov(P, F, qd, dt[i], A, Pp)
+            for a in range(n):
+                z[a] = zp[a]
+                for b in range(n):
+                    P[a, b] = Pp[a, b]
+        else:
+            for a in range(n):
+                for b in range(n):
+                    F[a, b] = 1.0 if a == b else 0.0
+        for a in range(n):
+            history[i, a, 0] = z[a]
+            for b in range(n):
+                history[i, a, 1 + b] = P[a, b]
+                history[i, a, 2 * n + 1 + b] = F[a, b]
+        if has_acoustic[i]:
+            force = gated_run >= gate_reset_after
+            nis, ok = _update_acoustic(z, P, lay, beacon, meas[i], meas_var[i], use_range, use_vr, gate,
+                                       iterations, force, work, Hw, second_order)
+            nis_out[i] = nis
+            if ok:
+                status[i] = 3 if (force and nis > gate) else 1
+                gated_run = 0
+            else:
+                status[i] = 2
+                gated_run += 1
+        if has_heading[i]:
+            _update_heading(z, P, heading[i], heading_var[i], ph)
+        if has_fix[i]:
+            _update_position(z, P, fix[i], fix_var[i], ph)
+        for a in range(n):
+            states[i, a] = z[a]
+            for b in range(n):
+                history[i, a, n + 1 + b] = P[a, b]
+    return states, nis_out, status
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Python side: nodes from streams, one filter run
+# ---------------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Nodes:
+    """The time grid the filter and the smoothers run on (see the module notes).
+
+    Arrays of length N: ``t_s``, ``dt_s`` (from the previous node; 0 at node 0), the IMU ``omega``,
+    ``accel`` applied over the step into each node, the heading measurement (``has_heading``,
+    ``heading``, ``heading_var``), the acoustic measurement (``has_acoustic``, ``meas`` (N, 2) range and
+    v_r, ``meas_var`` (N, 2)), ``frame`` (index of the record at that node, −1 elsewhere) and ``imu``
+    (index of the IMU sample at that node, −1 elsewhere).
+    """
+
+    t_s: np.ndarray
+    dt_s: np.ndarray
+    omega: np.ndarray
+    accel: np.ndarray
+    has_heading: np.ndarray
+    heading: np.ndarray
+    heading_var: np.ndarray
+    has_acoustic: np.ndarray
+    meas: np.ndarray
+    meas_var: np.ndarray
+    frame: np.ndarray
+    imu: np.ndarray
+    has_fix: np.ndarray = None
+    fix: np.ndarray = None
+    fix_var: np.ndarray = None
+
+    def __post_init__(self):
+        if self.has_fix is None:
+            N = self.t_s.size
+            object.__setattr__(self, "has_fix", np.zeros(N, dtype=bool))
+            object.__setattr__(self, "fix", np.zeros((N, 2)))
+            object.__setattr__(self, "fix_var", np.ones(N))
+
+    def __len__(self) -> int:
+        return self.t_s.size
+
+
+def build_nodes(imu_t, heading, omega, accel, frame_t, range_m, v_r_mps, range_var, v_r_var, *,
+                heading_var, t_start=None) -> Nodes:
+    """Merge IMU samples and frames into nodes sorted by time.
+
+    ``heading_var`` is a scalar or one value per IMU sample (NaN heading: no heading update at that sample).
+    A frame at the same time as an IMU sample shares its node. Frames before ``t_start`` (default the first
+    IMU time) or after the last IMU sample are dropped by the caller (:func:`run_filter` reports them).
+    """
+    imu_t = np.asarray(imu_t, dtype=float)
+    frame_t = np.asarray(frame_t, dtype=float)
+    t0 = imu_t[0] if t_start is None else float(t_start)
+    t_all = np.union1d(imu_t[imu_t >= t0], frame_t[frame_t >= t0])
+    if t_all.size == 0 or t_all[0] > t0:
+        t_all = np.r_[t0, t_all]
+    N = t_all.size
+    # rates over (t_{i-1}, t_i]: the first IMU sample at or after t_i (the last one past the end)
+    k = np.minimum(np.searchsorted(imu_t, t_all, side="left"), imu_t.size - 1)
+    omega_n = np.asarray(omega, dtype=float)[k]
+    accel_n = np.asarray(accel, dtype=float)[k]
+    dt = np.r_[0.0, np.diff(t_all)]
+    imu_at = np.full(N, -1, dtype=np.int64)
+    pos = np.searchsorted(t_all, imu_t)
+    inside = (pos < N) & (imu_t >= t0)
+    inside[inside] &= t_all[pos[inside]] == imu_t[inside]
+    imu_at[pos[inside]] = np.flatnonzero(inside)
+    head = np.full(N, np.nan)
+    hvar = np.full(N, np.nan)
+    hv = np.broadcast_to(np.asarray(heading_var, dtype=float), imu_t.shape)
+    head[imu_at >= 0] = np.asarray(heading, dtype=float)[imu_at[imu_at >= 0]]
+    hvar[imu_at >= 0] = hv[imu_at[imu_at >= 0]]
+    has_heading = np.isfinite(head) & np.isfinite(hvar)
+    frame_at = np.full(N, -1, dtype=np.int64)
+    fpos = np.searchsorted(t_all, frame_t)
+    finside = (frame_t >= t0) & (fpos < N)
+    finside[finside] &= t_all[fpos[finside]] == frame_t[finside]
+    frame_at[fpos[finside]] = np.flatnonzero(finside)
+    meas = np.zeros((N, 2))
+    mvar = np.ones((N, 2))
+    sel = frame_at >= 0
+    idx = frame_at[sel]
+    meas[sel, 0] = np.asarray(range_m, dtype=float)[idx]
+    meas[sel, 1] = np.asarray(v_r_mps, dtype=float)[idx]
+    mvar[sel, 0] = np.broadcast_to(np.asarray(range_var, dtype=float), frame_t.shape)[idx]
+    mvar[sel, 1] = np.broadcast_to(np.asarray(v_r_var, dtype=float), frame_t.shape)[idx]
+    return Nodes(t_all, dt, omega_n, accel_n, has_heading, np.nan_to_num(head), np.nan_to_num(hvar, nan=1.0),
+                 sel, meas, mvar, frame_at, imu_at)
+
+
+def add_fixes(nodes: Nodes, t_s, x_m, y_m, sigma_m) -> Nodes:
+    """Nodes with position fixes (e.g. GNSS at the surface) at the nodes nearest their times.
+
+    A fix more than half an IMU step away from every node is dropped; the caller reports it.
+    """
+    t_s = np.atleast_1d(np.asarray(t_s, dtype=float))
+    has_fix, fix, fix_var = nodes.has_fix.copy(), nodes.fix.copy(), nodes.fix_var.copy()
+    if t_s.size:
+        k = np.clip(np.searchsorted(nodes.t_s, t_s), 1, len(nodes) - 1) if len(nodes) > 1 else np.zeros(t_s.size, int)
+        if len(nodes) > 1:
+            k = np.where(np.abs(nodes.t_s[k - 1] - t_s) <= np.abs(nodes.t_s[k] - t_s), k - 1, k)
+        step = np.median(np.diff(nodes.t_s)) if len(nodes) > 1 else np.inf
+        ok = np.abs(nodes.t_s[k] - t_s) <= 0.5 * step
+        has_fix[k[ok]] = True
+        fix[k[ok], 0] = np.asarray(x_m, dtype=float)[ok]
+        fix[k[ok], 1] = np.asarray(y_m, dtype=float)[ok]
+        fix_var[k[ok]] = np.broadcast_to(np.asarray(sigma_m, dtype=float) ** 2, t_s.shape)[ok]
+    return replace(nodes, has_fix=has_fix, fix=fix, fix_var=fix_var)
+
+
+@dataclass(eq=False)
+class FilterRun:
+    """A filter pass over nodes: posterior states, covariances, and what each frame did.
+
+    ``status`` per node: 0 no frame, 1 accepted, 2 gated (not used), 3 accepted after a run of gated
+    frames (the gate was reset). ``nis`` per node (NaN without a frame). ``history`` keeps what the
+    smoothers need (priors, covariances, transition Jacobians).
+    """
+
+    nodes: Nodes
+    config: InertialConfig
+    beacon_xy: np.ndarray
+    use_vr: bool
+    states: np.ndarray
+    history: np.ndarray
+    nis: np.ndarray
+    status: np.ndarray
+    z0: np.ndarray = field(repr=False, default=None)
+    P0: np.ndarray = field(repr=False, default=None)
+    has_heading: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def covariances(self) -> np.ndarray:
+        n = self.states.shape[1]
+        return np.ascontiguousarray(self.history[:, :, n + 1:2 * n + 1])
+
+    @property
+    def prior_states(self) -> np.ndarray:
+        return np.ascontiguousarray(self.history[:, :, 0])
+
+    @property
+    def prior_covariances(self) -> np.ndarray:
+        n = self.states.shape[1]
+        return np.ascontiguousarray(self.history[:, :, 1:n + 1])
+
+    @property
+    def transitions(self) -> np.ndarray:
+        n = self.states.shape[1]
+        return np.ascontiguousarray(self.history[:, :, 2 * n + 1:3 * n + 1])
+
+
+def run_filter(nodes: Nodes, config: InertialConfig, *, beacon_xy, z0, P0, use_vr: bool = True,
+               use_range: bool = True, start_from_first_heading: bool = True) -> FilterRun:
+    """The inertial filter over ``nodes`` from (z0, P0) at node 0.
+
+    With ``start_from_first_heading`` (z0, P0) already hold node 0's heading reading
+    (:meth:`InertialConfig.initial` with ``heading_from_sensor``), so node 0's heading update is skipped.
+    """
+    z0 = np.ascontiguousarray(z0, dtype=float)
+    P0 = np.ascontiguousarray(P0, dtype=float)
+    n = config.n_states
+    if z0.shape != (n,) or P0.shape != (n, n):
+        raise ConfigError("z0", f"must have {n} states for this configuration, got shapes {z0.shape}, {P0.shape}")
+    beacon = np.asarray(beacon_xy, dtype=float)
+    gate = config.gate[1 if (use_vr and use_range) else 0]
+    history = np.empty((len(nodes), n, 3 * n + 1))
+    has_heading = nodes.has_heading.copy()
+    if start_from_first_heading:
+        has_heading[0] = False
+    states, nis, status = filter_nodes(z0, P0, config.layout, config.process_density, beacon, nodes.dt_s,
+                                       nodes.omega, nodes.accel, has_heading, nodes.heading,
+                                       nodes.heading_var, nodes.has_acoustic, nodes.meas, nodes.meas_var,
+                                       use_range, use_vr, gate, config.gate_reset_after, config.iterations,
+                                       config.second_order, nodes.has_fix, nodes.fix, nodes.fix_var, history)
+    return FilterRun(nodes, config, beacon, use_vr, states, history, nis, status, z0, P0, has_heading)
+
+
+def with_options(config: InertialConfig, **kwargs) -> InertialConfig:
+    """``dataclasses.replace`` with validation (for CLI overrides)."""
+    return replace(config, **kwargs)

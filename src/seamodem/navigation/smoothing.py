@@ -1,0 +1,229 @@
+"""Smoothers of the inertial filter: the whole mission (batch) and a fixed lag (real time).
+
+Both run on the nodes of :mod:`.inertial` and report covariances.
+
+- :func:`batch_smooth` is the maximum a posteriori track given every IMU sample,
+  heading reading and acoustic frame of the mission: Gauss–Newton on the
+  nonlinear least-squares problem whose unknowns are the states at every node
+  (motion, gyro and accelerometer, heading, bias random walk, range and v_r
+  residuals, each weighted by its σ). Its normal matrix is block-tridiagonal,
+  and one Gauss–Newton step on it is exactly one linearized Kalman filter plus
+  a Rauch–Tung–Striebel pass about the current track — the iterated extended
+  Kalman smoother (Bell 1994). Solving it that way costs O(N n³) and gives the
+  marginal covariances of every node for free.
+- :func:`fixed_lag_smooth` gives, for each node, the estimate from everything
+  up to ``lag_s`` seconds later: the latency of a real-time output that still
+  uses the next frame.
+
+Frames the filter gated are left out of both (their status is in the filter run).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..errors import ConfigError
+from .inertial import FilterRun, _acoustic_model, _motion, _propagate_cov, _update_heading, _update_position, _wrap
+
+__all__ = ["SmoothedTrack", "batch_smooth", "fixed_lag_smooth"]
+
+
+class SmoothedTrack:
+    """States (N, n), covariances (N, n, n) and the number of Gauss–Newton iterations (batch) or the lag [s]."""
+
+    def __init__(self, states, covariances, *, iterations=None, lag_s=None, converged=True):
+        self.states = states
+        self.covariances = covariances
+        self.iterations = iterations
+        self.lag_s = lag_s
+        self.converged = converged
+
+
+@njit(cache=True, nogil=True)
+def _rts_gains(post, P_post, prior, P_prior, F):
+    """C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹ for k = 0…N−2 (row N−1 zero)."""
+    N, n = post.shape
+    C = np.zeros((N, n, n))
+    for k in range(N - 1):
+        # P⁻_{k+1} Cᵀ = F_{k+1} P⁺_k
+        Ct = np.linalg.solve(P_prior[k + 1], F[k + 1] @ P_post[k])
+        C[k] = Ct.T
+    return C
+
+
+@njit(cache=True, nogil=True)
+def _rts(post, P_post, prior, P_prior, C):
+    N, n = post.shape
+    xs = post.copy()
+    Ps = P_post.copy()
+    for k in range(N - 2, -1, -1):
+        xs[k] = post[k] + C[k] @ (xs[k + 1] - prior[k + 1])
+        Pk = P_post[k] + C[k] @ (Ps[k + 1] - P_prior[k + 1]) @ C[k].T
+        Ps[k] = 0.5 * (Pk + Pk.T)
+    return xs, Ps
+
+
+@njit(cache=True, nogil=True)
+def _linearized_pass(nominal, z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var,
+                     use_frame, meas, meas_var, use_range, use_vr, has_fix, fix, fix_var, post, P_post, prior, P_prior,
+                     F_all):
+    """Kalman filter of the model linearized about ``nominal`` (one Gauss–Newton step, forward half)."""
+    N, n = nominal.shape
+    z = z0.copy()
+    P = P0.copy()
+    fx = np.empty(n)
+    F = np.empty((n, n))
+    A = np.empty((n, n))
+    Pp = np.empty((n, n))
+    ph = np.empty(n)
+    h = np.empty(2)
+    H = np.zeros((2, n))
+    for i in range(N):
+        if i > 0:
+            _motion(nominal[i - 1], lay, omega[i], accel[i], dt[i], fx, F)
+            for a in range(n):
+                acc = fx[a]
+                for b in range(n):
+                    acc += F[a, b] * (z[b] - nominal[i - 1, b])
+                ph[a] = acc
+            _propagate_cov(P, F, qd, dt[i], A, Pp)
+            for a in range(n):
+                z[a] = ph[a]
+                for b in range(n):
+                    P[a, b] = Pp[a, b]
+        else:
+            for a in range(n):
+                for b in range(n):
+                    F[a, b] = 1.0 if a == b else 0.0
+        for a in range(n):
+            prior[i, a] = z[a]
+            for b in range(n):
+                P_prior[i, a, b] = P[a, b]
+                F_all[i, a, b] = F[a, b]
+        if use_frame[i]:
+            rows = _acoustic_model(nominal[i], lay, beacon, use_range, use_vr, h, H)
+            for r in range(rows):
+                target = meas[i, 0] if (use_range and r == 0) else meas[i, 1]
+                var = meas_var[i, 0] if (use_range and r == 0) else meas_var[i, 1]
+                nu = target - h[r]
+                for b in range(n):
+                    nu -= H[r, b] * (z[b] - nominal[i, b])
+                s = var
+                for a in range(n):
+                    acc = 0.0
+                    for b in range(n):
+                        acc += P[a, b] * H[r, b]
+                    ph[a] = acc
+                    s += H[r, a] * acc
+                for a in range(n):
+                    z[a] += ph[a] / s * nu
+                for a in range(n):
+                    for b in range(n):
+                        P[a, b] -= ph[a] * ph[b] / s
+        if has_heading[i]:
+            # the heading row is linear: the same update as the filter's, angle wrapped about the nominal
+            _update_heading(z, P, nominal[i, 2] + nominal[i, 4] + _wrap(heading[i] - nominal[i, 2] - nominal[i, 4]),
+                            heading_var[i], ph)
+        if has_fix[i]:
+            _update_position(z, P, fix[i], fix_var[i], ph)
+        for a in range(n):
+            post[i, a] = z[a]
+            for b in range(n):
+                P_post[i, a, b] = P[a, b]
+
+
+def _used_frames(run: FilterRun) -> np.ndarray:
+    return run.nodes.has_acoustic & (run.status != 2)
+
+
+def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6) -> SmoothedTrack:
+    """Maximum a posteriori track over the whole mission (iterated extended Kalman smoother).
+
+    Parameters
+    ----------
+    run : FilterRun
+        A filter pass (:func:`~seamodem.navigation.inertial.run_filter`): its nodes, configuration, initial
+        state and the frames it accepted; its RTS-smoothed track is the first linearization point.
+    max_iterations : int
+        Gauss–Newton iterations at most.
+    tol : float
+        Stop when no state moves by more than ``tol`` (in its own unit) between iterations.
+
+    Returns
+    -------
+    SmoothedTrack with states (N, n) and covariances (N, n, n) at every node.
+
+    Notes
+    -----
+    Each iteration linearizes motion and measurements about the current track and solves the linear
+    least-squares problem exactly (forward Kalman filter + Rauch–Tung–Striebel); the fixed point is the
+    MAP estimate, and the covariances are the inverse Gauss–Newton Hessian's diagonal blocks.
+    """
+    if max_iterations < 1:
+        raise ConfigError("max_iterations", f"must be >= 1, got {max_iterations!r}")
+    nodes, cfg = run.nodes, run.config
+    N, n = run.states.shape
+    use = _used_frames(run)
+    C = _rts_gains(run.states, run.covariances, run.prior_states, run.prior_covariances, run.transitions)
+    nominal, _ = _rts(run.states, run.covariances, run.prior_states, run.prior_covariances, C)
+    post, P_post = np.empty((N, n)), np.empty((N, n, n))
+    prior, P_prior, F = np.empty((N, n)), np.empty((N, n, n)), np.empty((N, n, n))
+    use_range = True
+    converged = False
+    it = 0
+    Ps = None
+    for it in range(1, max_iterations + 1):
+        _linearized_pass(nominal, run.z0, run.P0, cfg.layout, cfg.process_density, run.beacon_xy, nodes.dt_s,
+                         nodes.omega, nodes.accel, run.has_heading, nodes.heading, nodes.heading_var, use,
+                         nodes.meas, nodes.meas_var, use_range, run.use_vr, nodes.has_fix, nodes.fix, nodes.fix_var, post,
+                         P_post, prior, P_prior, F)
+        C = _rts_gains(post, P_post, prior, P_prior, F)
+        xs, Ps = _rts(post, P_post, prior, P_prior, C)
+        step = float(np.max(np.abs(xs - nominal)))
+        nominal = xs
+        if step < tol:
+            converged = True
+            break
+    return SmoothedTrack(nominal, Ps, iterations=it, converged=converged)
+
+
+@njit(cache=True, nogil=True)
+def _fixed_lag(post, P_post, prior, P_prior, C, end):
+    N, n = post.shape
+    xs_out = np.empty((N, n))
+    Ps_out = np.empty((N, n, n))
+    for k in range(N):
+        j = end[k]
+        xs = post[j].copy()
+        Ps = P_post[j].copy()
+        for m in range(j - 1, k - 1, -1):
+            xs = post[m] + C[m] @ (xs - prior[m + 1])
+            Ps = P_post[m] + C[m] @ (Ps - P_prior[m + 1]) @ C[m].T
+        xs_out[k] = xs
+        Ps_out[k] = 0.5 * (Ps + Ps.T)
+    return xs_out, Ps_out
+
+
+def fixed_lag_smooth(run: FilterRun, *, lag_s: float) -> SmoothedTrack:
+    """Each node's state given everything up to ``lag_s`` seconds after it (a real-time output ``lag_s`` late).
+
+    Parameters
+    ----------
+    run : FilterRun
+    lag_s : float
+        Latency bound [s], > 0. A lag of one frame period lets every dead-reckoned stretch see its next frame.
+
+    Notes
+    -----
+    For node k the Rauch–Tung–Striebel recursion runs from the filtered state at the last node within
+    t_k + lag_s back to k; its gains are the full smoother's, so the cost is O(N · L · n³) for L nodes per lag.
+    At the end of the mission the lag shrinks to what exists (the last node is the filter's own).
+    """
+    if not (np.isfinite(lag_s) and lag_s > 0):
+        raise ConfigError("lag_s", f"must be > 0 s, got {lag_s!r}")
+    t = run.nodes.t_s
+    end = np.searchsorted(t, t + lag_s, side="right") - 1
+    C = _rts_gains(run.states, run.covariances, run.prior_states, run.prior_covariances, run.transitions)
+    xs, Ps = _fixed_lag(run.states, run.covariances, run.prior_states, run.prior_covariances, C, end)
+    return SmoothedTrack(xs, Ps, lag_s=float(lag_s))
