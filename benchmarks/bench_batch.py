@@ -29,7 +29,7 @@ import soundfile
 from seamodem import BeaconSchedule, get_preset, render_beacon
 from seamodem.batch import default_workers, run_tasks
 from seamodem.batch.decode import Recording, decode_part, plan_parts
-from seamodem.receive.receiver import Emissions
+from seamodem.receive import Emissions, ReceiverSettings
 
 CFG = get_preset("jmse2024")
 FS = int(CFG.sample_rate_hz)
@@ -50,7 +50,7 @@ def make_recordings(folder: Path, n_files: int, duration_s: float) -> list[Recor
         soundfile.write(path, y, FS, subtype="FLOAT")
         payloads = [fr.payload for fr in sig.frames]
         recs.append(Recording(str(path), CFG, Emissions(start_s=0.0, period_s=1.0),
-                              options={"decode": True, "payloads": payloads}))
+                              settings=ReceiverSettings(decode=True), payloads=payloads))
     return recs
 
 

@@ -11,7 +11,7 @@ Run: python benchmarks/bench_decode.py [--frames 200] [--sweep-frames 30] [--ski
 2. Speed on that recording, one process: measuring only, then measuring and
    decoding; real-time factors (goal ≥ 20× with the DFE) and decoded symbols per
    second (median of --repeats runs).
-3. FER against SNR on the same channel (``seamodem.decode.sweep``): the SNR at
+3. FER against SNR on the same channel (``seamodem.studies.ber``): the SNR at
    FER 10 % with the DFE alone and with turbo passes, and the gain in dB.
 4. AWGN through the whole receiver, BPSK and QPSK: raw BER of the DFE's
    decisions beside Q(√(2Eb/N0)) and the SNR loss at BER 1e-3 (goal ≤ 0.5 dB).
@@ -33,9 +33,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from seamodem import get_preset
-from seamodem.decode.sweep import AWGN_SCENARIO, ber_sweep, snr_at_fer, theory_ber
+from seamodem.studies.ber import AWGN_SCENARIO, ber_sweep, snr_at_fer, theory_ber
 from seamodem.io.sidecar import read_sidecar, sidecar_payloads, sidecar_pilot_bits
-from seamodem.receive.receiver import Emissions, receive_file
+from seamodem.receive import Emissions, ReceiverSettings, receive_file
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "examples" / "scenarios" / "decode_multipath.toml"
@@ -61,8 +61,8 @@ def receive(rec: Path, decode: bool):
         t0 = time.perf_counter()
         recs = list(
             receive_file(
-                rec, cfg, emissions=emissions, progress=False, pilot=1.0 - 2.0 * bits, decode=decode,
-                payloads=payloads, sound_speed_mps=side["channel"]["sound_speed_mps"],
+                rec, cfg, emissions=emissions, progress=False, pilot=1.0 - 2.0 * bits, payloads=payloads,
+                settings=ReceiverSettings(sound_speed_mps=side["channel"]["sound_speed_mps"], decode=decode),
             )
         )
         wall = time.perf_counter() - t0

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from seamodem import BeaconSchedule, Emissions, FrameConfig, get_preset, load_scenario, receive_file, write_beacon
+from seamodem import BeaconSchedule, Emissions, FrameConfig, ReceiverSettings, get_preset, load_scenario, receive_file
+from seamodem import write_beacon
 from seamodem import read_measurements, simulate_file, write_measurements
 from seamodem.io.sidecar import read_sidecar, sidecar_path, sidecar_payloads
 
@@ -38,8 +39,8 @@ def main(out: Path, recording: Path | None) -> None:
     emissions = Emissions(times_s=np.array([f["t_emit_s"] for f in sidecar["frames"]]))
     sent = sidecar_payloads(sidecar)  # the payload of each frame, to count bit errors
     c = float(sidecar.get("channel", {}).get("sound_speed_mps", 1500.0))
-    records = receive_file(recording, config, emissions=emissions, sound_speed_mps=c, progress=False,
-                           decode=True, payloads=sent)
+    settings = ReceiverSettings(sound_speed_mps=c, decode=True)
+    records = receive_file(recording, config, emissions=emissions, settings=settings, payloads=sent, progress=False)
     n = write_measurements(out / "measurements.csv", records,
                            {"created_by": "examples/decode_recording.py", "recording": str(recording),
                             "sound_speed_mps": c, "config": config.to_dict()})

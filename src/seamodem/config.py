@@ -33,6 +33,8 @@ FEC_SCHEMES = ("conv_k7_r12", "none")
 CRC_SCHEMES = {"crc16": 2, "crc32": 4}
 #: Bytes of the length header that precedes the payload inside the coded block.
 LENGTH_HEADER_BYTES = 2
+#: text a beacon sends in every frame when given none; {index} becomes the frame index
+DEFAULT_PAYLOAD_TEXT = "seamodem frame {index}"
 #: Tail bits that terminate the K = 7 convolutional code in the all-zero state.
 CONV_TAIL_BITS = 6
 

@@ -282,6 +282,13 @@ class _FrameGrab:
         self.seen += 1
 
 
+def receiver_settings(sidecar: dict):
+    """How the demo's receiver works: the channel's sound speed, payloads decoded."""
+    from .receive import ReceiverSettings
+
+    return ReceiverSettings(sound_speed_mps=float(sidecar["channel"]["sound_speed_mps"]), decode=True)
+
+
 def receive(recording: Path, sidecar: dict, *, grab_frame: int | None = None):
     """Measure and decode every frame of ``recording``: (records, grabbed frame or None)."""
     from .io.sidecar import sidecar_payloads
@@ -289,11 +296,9 @@ def receive(recording: Path, sidecar: dict, *, grab_frame: int | None = None):
 
     config = FrameConfig.from_dict(sidecar["config"])
     times = np.array([f["t_emit_s"] for f in sidecar["frames"]])
-    payloads = sidecar_payloads(sidecar)
     grab = _FrameGrab(grab_frame) if grab_frame is not None else None
-    records = list(receive_file(recording, config, emissions=Emissions(times_s=times), progress=False,
-                                sound_speed_mps=float(sidecar["channel"]["sound_speed_mps"]),
-                                on_frame=grab, decode=True, payloads=payloads))
+    records = list(receive_file(recording, config, emissions=Emissions(times_s=times), settings=receiver_settings(sidecar),
+                                payloads=sidecar_payloads(sidecar), on_frame=grab, progress=False))
     return records, (grab.frame if grab else None)
 
 
@@ -626,18 +631,18 @@ def plot_constellation(path, grabbed, config: FrameConfig, sidecar: dict) -> Non
     """One frame's data symbols: after Doppler compensation (eq 10–11) and after the DFE.
 
     The frame goes once more through the receiver's own decoding step
-    (:func:`seamodem.decode.frame.decode_received`, same speed, track and
-    equaliser sizing), so the picture is what the receiver decoded.
+    (:func:`seamodem.receive.demodulate.demodulate`, same settings but the
+    DFE alone), so the picture is what the receiver decoded.
     """
-    from .decode.frame import decode_received
+    import dataclasses
+
     from .io.sidecar import sidecar_pilot_bits
+    from .receive.demodulate import demodulate
 
     m, bb, t0_s, fs = grabbed
     pilot = (1.0 - 2.0 * sidecar_pilot_bits(sidecar)).astype(complex)
-    c = float(sidecar["channel"]["sound_speed_mps"])
-    dec = decode_received(bb, fs, t0_s, config=config, pilot=pilot, t_start_s=m.pilot.t_start_s,
-                          v_mps=m.compensation_speed_mps,
-                          sound_speed_mps=c, passes=1, track_t_s=m.track_t_s, track_v_mps=m.track_v_mps)
+    settings = dataclasses.replace(receiver_settings(sidecar), turbo_passes=1)
+    dec = demodulate(m, bb, t0_s, fs, config=config, pilot=pilot, settings=settings)
     fig, axes = _figure(1, 2, figsize=(9, 4.5), constrained_layout=True)
     data = dec.compensated.symbols[config.n_pilot:]
     for ax, z, title in ((axes[0], data, "after Doppler compensation (eq 10–11)"),

@@ -14,7 +14,7 @@ from seamodem import BeaconSchedule, get_preset, render_beacon
 from seamodem.batch import decode_files, min_overlap_s
 from seamodem.batch.decode import Recording
 from seamodem.errors import ConfigError
-from seamodem.receive.receiver import Emissions, receive_file
+from seamodem.receive import Emissions, ReceiverSettings, receive_file
 from seamodem.receive.records import read_measurements
 
 distributed = pytest.importorskip("distributed")
@@ -149,7 +149,7 @@ def test_resume_ignores_parts_of_other_options(recordings, tmp_path):
     out = tmp_path / "m.jsonl"
     decode_files(recordings[:1], CFG, emissions=EMIT, output=out, backend="serial", progress=False)
     other = decode_files(recordings[:1], CFG, emissions=EMIT, output=out, resume=True, backend="serial",
-                         progress=False, sound_speed_mps=1480.0)
+                         progress=False, settings=ReceiverSettings(sound_speed_mps=1480.0))
     assert other.n_resumed == 0  # the manifest was removed, and its key holds the sound speed anyway
     assert other.records[0].range_m == pytest.approx(1480.0 * other.records[0].tof_s)
 

@@ -8,7 +8,7 @@ import pytest
 
 from seamodem import get_preset
 from seamodem.batch import map_tasks
-from seamodem.decode.sweep import ber_sweep
+from seamodem.studies.ber import ber_sweep
 from seamodem.navigation.montecarlo import MissionConfig, run_monte_carlo
 
 distributed = pytest.importorskip("distributed")

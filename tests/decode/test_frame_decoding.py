@@ -4,7 +4,7 @@ import numpy as np
 
 from seamodem import build_frame, frame_symbol_times, get_preset, pb2bb, srrc_matrix
 from seamodem.decode.equalizer import DfeSettings
-from seamodem.decode.frame import decode_frame
+from seamodem.receive.demodulate import decode_frame
 from seamodem.receive.compensate import compensate_frame
 from seamodem.transmit.frame import tone_envelope
 

@@ -19,8 +19,8 @@ import soundfile
 
 from seamodem import BeaconSchedule, get_preset, write_beacon
 from seamodem.cli import main
-from seamodem.decode.frame import channel_span_symbols, dfe_for_span
-from seamodem.decode.sweep import ber_point, ber_sweep, theory_ber
+from seamodem.receive.demodulate import channel_span_symbols, dfe_for_span
+from seamodem.studies.ber import ber_point, ber_sweep, theory_ber
 from seamodem.receive import read_measurements
 
 CFG = get_preset("jmse2024")
@@ -93,7 +93,7 @@ def test_raw_ber_of_the_whole_receiver_follows_the_awgn_theory():
 
 
 def _awgn():
-    from seamodem.decode.sweep import AWGN_SCENARIO
+    from seamodem.studies.ber import AWGN_SCENARIO
 
     return AWGN_SCENARIO
 

@@ -11,6 +11,7 @@ from seamodem import build_frame, get_preset
 from seamodem.receive import (
     Emissions,
     Receiver,
+    ReceiverSettings,
     compensate_frame,
     delay_crlb_s,
     gabor_bandwidth_hz,
@@ -50,8 +51,8 @@ def _receive(x, emissions=None, **kw):
     rx = Receiver(
         CFG,
         emissions=emissions or Emissions(start_s=0.0, period_s=1.0),
+        settings=ReceiverSettings(**kw),
         on_frame=lambda m, bb, t0, fs: seen.append((m, bb.copy(), t0, fs)),
-        **kw,
     )
     recs = list(rx.run((x[i : i + 300_000] for i in range(0, len(x), 300_000)), fs=FS))
     return recs, seen, rx

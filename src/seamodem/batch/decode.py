@@ -27,27 +27,25 @@ import math
 import os
 import shutil
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import soundfile
 
 from .._version import __version__
 from ..config import FrameConfig
-from ..errors import ConfigError, InputFileError, SeamodemError
+from ..errors import ConfigError, SeamodemError
+from ..io.blocks import BlockStats, read_blocks
 from ..io.files import atomic_outputs, check_writable
 from ..io.wav import wav_channel
-from ..receive.receiver import (
-    NOISE_GAP_S,
-    NOISE_WINDOW_S,
-    Emissions,
-    Receiver,
-    ReceiverWarning,
-)
+from ..receive.detect import DETECTION_CONTEXT_S
+from ..receive.measure import NOISE_GAP_S, NOISE_WINDOW_S, frame_span_s
 from ..receive.records import MeasurementRecord, write_measurements
+from ..receive.recording import recording_warnings
+from ..receive.settings import Emissions, ReceiverSettings
+from ..receive.stream import Receiver, ReceiverWarning
 from .runner import TaskResult, run_tasks
 
 __all__ = [
@@ -64,10 +62,6 @@ __all__ = [
 
 PART_FORMAT = "seamodem.batch-part/1"
 
-#: samples read per block, as :func:`~seamodem.receive.receiver.receive_file` (same blocks, same numbers)
-BLOCK = 1 << 20
-#: the detector's noise context before a frame [s] (PilotDetector.context)
-DETECTION_CONTEXT_S = 0.5
 #: half-width of the band around a segment boundary where neighbours' frames are reconciled, in frames
 GUARD_FRAMES = 0.25
 
@@ -84,35 +78,26 @@ class Recording:
     emissions : Emissions
     channel : int, optional
         Channel of a multichannel file.
-    options : dict
-        Keyword arguments of :class:`~seamodem.receive.receiver.Receiver`
-        (sound_speed_mps, clock_offset_s, turnaround_s, v_max_mps,
-        false_alarms_per_hour, pilot); not ``on_frame``.
+    settings : ReceiverSettings
+        How the recording is received (default: ``ReceiverSettings()``).
+    pilot : numpy.ndarray, optional
+        Pilot symbols (default: from the config's seed).
+    payloads : sequence of bytes, optional
+        The payload sent in each frame, to count bit errors when decoding.
     """
 
     path: str | Path
     config: FrameConfig
     emissions: Emissions
     channel: int | None = None
-    options: dict = field(default_factory=dict)
-
-    def __post_init__(self):
-        if "on_frame" in self.options:
-            raise ConfigError("on_frame", "is not available in batch decoding (parts run in other processes)")
-
-    @property
-    def sound_speed_mps(self) -> float:
-        return float(self.options.get("sound_speed_mps", 1500.0))
-
-    @property
-    def v_max_mps(self) -> float:
-        return float(self.options.get("v_max_mps", 5.0))
+    settings: ReceiverSettings = field(default_factory=ReceiverSettings)
+    pilot: np.ndarray | None = None
+    payloads: Sequence[bytes] | None = None
 
 
 def _frame_span_s(rec: Recording) -> float:
-    """Longest a received frame lasts, with the receiver's tail and noise window after it [s]."""
-    stretch = 1 + rec.v_max_mps / rec.sound_speed_mps
-    return rec.config.frame_duration_s * stretch + 0.02 + NOISE_GAP_S + NOISE_WINDOW_S
+    s = rec.settings
+    return frame_span_s(rec.config, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
 
 
 def _guard_s(rec: Recording) -> float:
@@ -167,7 +152,7 @@ class Part:
         """Identity of the work: file (path, size, modification time), range and every option."""
         path = Path(self.file)
         st = path.stat()
-        e = self.recording.emissions
+        rec = self.recording
         material = {
             "version": __version__,
             "path": str(path),
@@ -175,9 +160,11 @@ class Part:
             "mtime_ns": st.st_mtime_ns,
             "range": [self.start, self.end, self.lo, self.hi, self.channel],
             "keep": [self.keep_lo_s, self.keep_hi_s],
-            "config": self.recording.config.to_dict(),
-            "emissions": [None if e.times_s is None else e.times_s.tolist(), e.start_s, e.period_s],
-            "options": {k: _plain(v) for k, v in sorted(self.recording.options.items())},
+            "config": rec.config.to_dict(),
+            "emissions": rec.emissions.to_list(),
+            "settings": rec.settings.to_dict(),
+            "pilot": _plain(rec.pilot),
+            "payloads": None if rec.payloads is None else [bytes(p).hex() for p in rec.payloads],
         }
         text = json.dumps(material, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:24]
@@ -235,41 +222,6 @@ def plan_parts(
     return parts, failed
 
 
-def _blocks(part: Part, stats: dict) -> Iterator[np.ndarray]:
-    """Samples [lo, hi) of the part's channel, checked for NaN and truncation, with clipping counted."""
-    path = part.recording.path
-    with soundfile.SoundFile(part.file) as f:
-        pcm = f.subtype.startswith("PCM")
-        f.seek(part.lo)
-        pos = part.lo
-        while pos < part.hi:
-            try:
-                data = f.read(min(BLOCK, part.hi - pos), dtype="float64", always_2d=True)
-            except (soundfile.LibsndfileError, RuntimeError) as exc:
-                raise InputFileError(f"recording {path} is truncated or corrupt: {exc}") from None
-            if data.shape[0] == 0:
-                raise InputFileError(f"recording {path} is truncated: header says {part.n_samples} samples, read {pos}")
-            x = np.ascontiguousarray(data[:, part.channel])
-            if not np.all(np.isfinite(x)):
-                raise InputFileError(f"recording {path} contains NaN or infinite samples (near sample {pos})")
-            # clipping and silence are counted over the segment proper, so that the file's totals add up
-            a, b = max(pos, part.start) - pos, min(pos + len(x), part.end) - pos
-            if b > a:
-                stats["clipped"] += int(np.count_nonzero(np.abs(x[a:b]) >= (1.0 - 2.0**-15 if pcm else 1.0)))
-                stats["silent"] = stats["silent"] and not np.any(x[a:b])
-            pos += len(x)
-            yield x
-
-
-def _shifted(e: Emissions, t0_s: float) -> Emissions:
-    """The same emissions on a clock whose zero is at ``t0_s``."""
-    if t0_s == 0:
-        return e
-    if e.times_s is None:
-        return Emissions(start_s=e.start_s - t0_s, period_s=e.period_s)
-    return Emissions(times_s=e.times_s - t0_s)
-
-
 def decode_part(part: Part) -> dict[str, Any]:
     """Records of one part (the task run by the workers).
 
@@ -282,18 +234,29 @@ def decode_part(part: Part) -> dict[str, Any]:
     """
     rec = part.recording
     t0 = part.lo / part.fs
-    stats = {"clipped": 0, "silent": True}
+    stats = BlockStats()
     cut: list[float] = []
 
     def on_frame(m, *_):
         if not m.complete:
             cut.append(m.pilot.t_start_s + t0)
 
-    rx = Receiver(rec.config, emissions=_shifted(rec.emissions, t0), on_frame=on_frame, **rec.options)
+    rx = Receiver(
+        rec.config,
+        emissions=rec.emissions.shifted(t0),
+        settings=rec.settings,
+        pilot=rec.pilot,
+        payloads=rec.payloads,
+        on_frame=on_frame,
+    )
+    blocks = read_blocks(
+        part.file, channel=part.channel, start=part.lo, stop=part.hi, counted=(part.start, part.end), stats=stats,
+        name=rec.path,
+    )
     kept = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ReceiverWarning)
-        for r in rx.run(_blocks(part, stats), fs=part.fs):
+        for r in rx.run(blocks, fs=part.fs):
             t_arr = r.t_arrival_s + t0
             if part.keep_lo_s <= t_arr < part.keep_hi_s:
                 kept.append(_on_file_clock(r, t_arr, rec.emissions, str(rec.path)))
@@ -311,19 +274,12 @@ def decode_part(part: Part) -> dict[str, Any]:
                     f"recording {rec.path}: frame at {t:.3f} s is cut by the end of the recording: "
                     "its Doppler uses the part received"
                 )
-    return {"records": kept, "clipped": stats["clipped"], "silent": stats["silent"], "warnings": messages}
+    return {"records": kept, "clipped": stats.clipped, "silent": stats.silent, "warnings": messages}
 
 
 def _on_file_clock(r: MeasurementRecord, t_arrival_s: float, emissions: Emissions, source: str) -> MeasurementRecord:
     """A part's record with its times on the recording's clock (t = 0 at its first sample)."""
-    k = r.frame_index
-    if k < 0:
-        t_emit = math.nan
-    elif emissions.times_s is None:
-        t_emit = emissions.start_s + k * emissions.period_s
-    else:
-        t_emit = float(emissions.times_s[k])
-    return dataclasses.replace(r, t_arrival_s=t_arrival_s, t_emit_s=t_emit, source=source)
+    return dataclasses.replace(r, t_arrival_s=t_arrival_s, t_emit_s=emissions.time_of(r.frame_index), source=source)
 
 
 @dataclass(frozen=True)
@@ -408,14 +364,16 @@ def decode_files(
     scheduler=None,
     progress: bool | None | Callable[[int, int], None] = None,
     failed: Sequence[PartFailure] = (),
-    **receiver_options,
+    settings: ReceiverSettings | None = None,
+    pilot: np.ndarray | None = None,
+    payloads: Sequence[bytes] | None = None,
 ) -> BatchResult:
     """Decode several recordings, each whole or in overlapping segments, and merge the records.
 
     Parameters
     ----------
     recordings : sequence of Recording, str or Path
-        Paths use ``config``, ``emissions``, ``channel`` and ``receiver_options``.
+        Paths use ``config``, ``emissions``, ``channel``, ``settings``, ``pilot`` and ``payloads``.
     segment_s : float, optional
         Cut recordings longer than this into segments [s] (default: whole files).
     overlap_s : float, optional
@@ -447,7 +405,7 @@ def decode_files(
         else:
             if config is None or emissions is None:
                 raise ConfigError("config", "paths need a config and emissions (or give Recording objects)")
-            recs.append(Recording(r, config, emissions, channel, dict(receiver_options)))
+            recs.append(Recording(r, config, emissions, channel, settings or ReceiverSettings(), pilot, payloads))
     folder = None
     if output is not None:
         output = check_writable(output)
@@ -518,14 +476,8 @@ def _merge(parts: list[Part], values: list[dict | None]) -> tuple[list[Measureme
         kept.sort(key=lambda r: r.t_arrival_s)
         out.extend(kept)
         whole = len(done) == done[0][0].n_segments
-        path = rec.path
-        clipped = sum(v["clipped"] for _, v in done)
-        if whole and all(v["silent"] for _, v in done):
-            notes.append(f"recording {path} is silent (all samples are zero)")
-        if clipped:
-            notes.append(f"recording {path}: {clipped} samples are clipped at full scale; measurements may be biased")
-        if whole and not kept:
-            notes.append(f"no frame found in {path}")
+        stats = BlockStats(clipped=sum(v["clipped"] for _, v in done), silent=whole and all(v["silent"] for _, v in done))
+        notes.extend(recording_warnings(rec.path, stats, n_frames=len(kept) if whole else None))
     return out, notes
 
 

@@ -188,7 +188,7 @@ def map_tasks(fn: Callable[[Any], Any], tasks: Iterable, **options) -> list:
 
     Takes the options of :func:`run_tasks`; ``functools.partial(map_tasks,
     backend="dask", scheduler=...)`` is a ``mapper(fn, iterable)`` as
-    :func:`seamodem.decode.sweep.ber_sweep` takes.
+    :func:`seamodem.studies.ber.ber_sweep` takes.
 
     Raises
     ------

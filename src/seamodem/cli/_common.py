@@ -36,11 +36,11 @@ def _parse_value(text: str):
         return text
 
 
-def config_from_args(args: argparse.Namespace) -> FrameConfig:
-    """Preset, then ``--config`` file, then ``--set`` overrides."""
+def config_from_args(args: argparse.Namespace, *, config_file: str | None = None) -> FrameConfig:
+    """Preset, then ``--config`` file (or ``config_file``, e.g. a recording's own sidecar), then ``--set`` overrides."""
     config = get_preset(args.preset)
-    if args.config:
-        config = load_config(args.config, base=config)
+    if args.config or config_file:
+        config = load_config(args.config or config_file, base=config)
     overrides = {}
     for item in args.set:
         key, sep, value = item.partition("=")

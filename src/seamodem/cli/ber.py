@@ -8,8 +8,6 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import ConfigError, SeamodemError
 from ..io.files import atomic_outputs, check_writable
 from ._common import add_config_options, command_line, config_from_args
@@ -66,7 +64,7 @@ def _scenario(path: str | None) -> tuple[dict | None, Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..decode.sweep import ber_sweep, snr_at_fer, theory_ber
+    from ..studies.ber import ber_sweep, snr_at_fer, theory_ber
 
     config = config_from_args(args)
     if args.frames < 1:
@@ -91,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     run_config = {
         "created_by": command_line(),
         "config": config.to_dict(),
-        "scenario": scenario or "AWGN (seamodem.decode.sweep.AWGN_SCENARIO)",
+        "scenario": scenario or "AWGN (seamodem.studies.ber.AWGN_SCENARIO)",
         "snr_db": snrs,
         "frames": args.frames,
         "period_s": args.period,
@@ -153,8 +151,10 @@ def format_table(points, theory) -> str:
 
 def plot_ber(path, points, config, *, title: str = "") -> None:
     """BER (raw and decoded) and FER (DFE, turbo) against SNR, with the uncoded AWGN theory."""
+    import numpy as np
+
     from ..plots import _pyplot
-    from ..decode.sweep import theory_ber
+    from ..studies.ber import theory_ber
 
     plt = _pyplot()
     snr = np.array([p.snr_db for p in points])

@@ -7,8 +7,6 @@ from pathlib import Path
 
 from ..config import FrameConfig
 from ..io.files import atomic_outputs
-from ..io.sidecar import read_sidecar, sidecar_path
-from ..io.wav import read_wav
 from ._common import output_path
 
 
@@ -30,6 +28,8 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..io.sidecar import read_sidecar, sidecar_path
+    from ..io.wav import read_wav
     from ..plots import plot_recording
 
     wav = Path(args.recording)

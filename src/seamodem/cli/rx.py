@@ -1,4 +1,12 @@
-"""``seamodem rx``: measure every frame of a recording (range, radial speed, SNR)."""
+"""``seamodem rx``: measure every frame of one or many recordings (range, radial speed, SNR, payload).
+
+One recording streams through :func:`~seamodem.receive.recording.receive_file`;
+several, or any of the batch options, go through
+:func:`~seamodem.batch.decode.decode_files` (segments, processes or Dask) into
+one file with a ``source`` column. Both build one
+:class:`~seamodem.receive.settings.ReceiverSettings` per recording from the
+options and its sidecar, and write the same header.
+"""
 
 from __future__ import annotations
 
@@ -10,18 +18,13 @@ import warnings
 from pathlib import Path
 from typing import NamedTuple
 
-import numpy as np
-
-from ..batch.cli import add_batch_options, run_batch, wants_batch
 from ..errors import InputFileError, SeamodemError
 from ..io.files import atomic_outputs, check_writable
-from ..io.sidecar import read_sidecar, sidecar_path, sidecar_payloads, sidecar_pilot_bits
-from ..io.wav import wav_channel
-from ..receive.receiver import Emissions, ReceiverWarning, receive_file
-from ..receive.records import write_measurements
 from ._common import add_config_options, command_line, config_from_args
 
 DEFAULT_SOUND_SPEED_MPS = 1500.0
+#: the options that make ``seamodem rx`` a batch decode even for one recording
+BATCH_OPTIONS = ("segment", "overlap", "workers", "scheduler", "resume")
 
 
 def add_parser(sub) -> None:
@@ -78,17 +81,51 @@ def add_parser(sub) -> None:
     p.add_argument("--plot", metavar="DIR", help="write figures of the first --plot-frames frames to DIR")
     p.add_argument("--plot-frames", type=int, default=3, metavar="N", help="frames to plot (default 3)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
-    add_batch_options(p)
+    _add_batch_options(p)
     p.set_defaults(run=run)
 
 
-def _sidecar_for(args) -> dict | None:
+def _add_batch_options(p: argparse.ArgumentParser) -> None:
+    """The options for several or long recordings (docs/batch.md)."""
+    g = p.add_argument_group(
+        "several or long recordings",
+        "Given several recordings (e.g. a shell glob DIR/*.wav) or any of these options, the recordings "
+        "are decoded in parallel into one file with a 'source' column: recordings in the order given, "
+        "frames by arrival within each. Finished recordings and segments are kept in OUTPUT.parts/ "
+        "until all succeed; the exit code is 1 if any failed.",
+    )
+    g.add_argument(
+        "--segment",
+        type=float,
+        metavar="S",
+        help="cut recordings longer than S seconds into overlapping segments decoded in parallel",
+    )
+    g.add_argument(
+        "--overlap",
+        type=float,
+        metavar="S",
+        help="samples added on each side of a segment [s] (default: a frame plus the detector's context, ~1 s)",
+    )
+    g.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the CPUs)")
+    g.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on a Dask cluster (tcp://HOST:8786; needs pip install 'seamodem[dask]')",
+    )
+    g.add_argument(
+        "--resume", action="store_true", help="reuse the finished parts of an earlier run (OUTPUT.parts/)"
+    )
+
+
+def _sidecar_for(args, recording: str) -> dict | None:
     """The sidecar named by --config (if it is one), else the recording's own, else None.
 
     A --config that is a preset or a plain configuration file still takes the
     emission times, pilot and payloads from the recording's own sidecar when
     one lies beside it.
     """
+    from ..io.sidecar import read_sidecar, sidecar_path
+
     if args.config:
         path = Path(args.config)
         if path.suffix.lower() == ".json" and path.is_file():
@@ -98,11 +135,15 @@ def _sidecar_for(args) -> dict | None:
                 return None  # load_config reports it with the file name
             if isinstance(data, dict) and "format" in data:
                 return read_sidecar(path)
-    own = sidecar_path(args.recording)
-    return read_sidecar(own) if own.is_file() and own != Path(args.recording) else None
+    own = sidecar_path(recording)
+    return read_sidecar(own) if own.is_file() and own != Path(recording) else None
 
 
-def _emissions(args, sidecar, duration_s: float) -> Emissions:
+def _emissions(args, recording: str, sidecar, duration_s: float):
+    import numpy as np
+
+    from ..receive.settings import Emissions
+
     if args.emit_start is not None or args.emit_period is not None:
         if args.emit_start is None or args.emit_period is None:
             raise SeamodemError("emit-start: --emit-start and --emit-period go together")
@@ -120,7 +161,7 @@ def _emissions(args, sidecar, duration_s: float) -> Emissions:
         raise InputFileError("sidecar: lists no frames")
     if times[0] - args.clock_offset >= duration_s:
         raise InputFileError(
-            f"sidecar does not match {args.recording}: its first emission is at {times[0]:g} s, "
+            f"sidecar does not match {recording}: its first emission is at {times[0]:g} s, "
             f"after the recording's end at {duration_s:g} s"
         )
     return Emissions(times_s=times)
@@ -129,33 +170,37 @@ def _emissions(args, sidecar, duration_s: float) -> Emissions:
 class _Inputs(NamedTuple):
     """What the receiver of one recording needs, from the options and the sidecar."""
 
+    path: str
     info: object
-    sidecar: dict | None
     config: object
-    emissions: Emissions
-    pilot: np.ndarray | None
+    emissions: object
+    settings: object
+    pilot: object
     payloads: list | None
-    sound_speed_mps: float
 
 
-def _inputs(args: argparse.Namespace) -> _Inputs:
-    """Header, sidecar, configuration, emissions, pilot, payloads and c of ``args.recording``."""
-    info, _ = wav_channel(args.recording, channel=args.channel)
-    sidecar = _sidecar_for(args)
-    if sidecar is not None and not args.config:
-        args.config = str(sidecar_path(args.recording))
-    config = config_from_args(args)
-    emissions = _emissions(args, sidecar, info.frames / info.samplerate)
+def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
+    """Header, configuration, emissions, receiver settings, pilot and payloads of one recording."""
+    from ..io.sidecar import sidecar_path, sidecar_payloads, sidecar_pilot_bits
+    from ..io.wav import wav_channel
+    from ..receive.settings import ReceiverSettings
+
+    info, _ = wav_channel(recording, channel=args.channel)
+    sidecar = _sidecar_for(args, recording)
+    own_sidecar = sidecar is not None and not args.config
+    config = config_from_args(args, config_file=str(sidecar_path(recording)) if own_sidecar else None)
+    emissions = _emissions(args, recording, sidecar, info.frames / info.samplerate)
     pilot = None
     bits = sidecar_pilot_bits(sidecar) if sidecar is not None else None
     if bits is not None and bits.size == config.n_pilot:
         pilot = (1.0 - 2.0 * bits).astype(complex)
+    turnaround = args.turnaround
     two_way = ((sidecar or {}).get("channel") or {}).get("two_way")
-    if two_way and args.turnaround is None and args.emit_start is None:
+    if two_way and turnaround is None and args.emit_start is None:
         # a two-way exchange (seamodem channel with [two_way]): its frames' t_emit_s are the polls
-        args.turnaround = float(two_way["turnaround_s"])
+        turnaround = float(two_way["turnaround_s"])
         if not args.quiet:
-            print(f"two-way recording: turnaround {args.turnaround:g} s from its sidecar")
+            print(f"two-way recording: turnaround {turnaround:g} s from its sidecar")
     # an older or hand-made sidecar without payloads: decode without counting bit errors
     payloads = sidecar_payloads(sidecar) if sidecar is not None and args.decode else None
     sound_speed = args.sound_speed
@@ -163,53 +208,95 @@ def _inputs(args: argparse.Namespace) -> _Inputs:
         sound_speed = float((sidecar or {}).get("channel", {}).get("sound_speed_mps", DEFAULT_SOUND_SPEED_MPS))
     if not (math.isfinite(sound_speed) and sound_speed > 0):
         raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
-    return _Inputs(info, sidecar, config, emissions, pilot, payloads, sound_speed)
+    settings = ReceiverSettings(
+        sound_speed_mps=sound_speed,
+        clock_offset_s=args.clock_offset,
+        turnaround_s=turnaround,
+        v_max_mps=args.v_max,
+        false_alarms_per_hour=args.false_alarms_per_hour,
+        decode=args.decode,
+        turbo_passes=args.turbo_passes,
+    )
+    return _Inputs(recording, info, config, emissions, settings, pilot, payloads)
+
+
+def _header(args, inputs: list[_Inputs], *, batch: bool) -> dict:
+    """The measurement file's header: the command, and what the receiver was told."""
+    described = [
+        {
+            "sample_rate_hz": i.info.samplerate,
+            "sound_speed_mps": i.settings.sound_speed_mps,
+            "turnaround_s": i.settings.turnaround_s,
+            "config": i.config.to_dict(),
+        }
+        for i in inputs
+    ]
+    if not batch:
+        (one,) = described
+        return {
+            "created_by": command_line(),
+            "recording": str(inputs[0].path),
+            "sample_rate_hz": one["sample_rate_hz"],
+            "sound_speed_mps": one["sound_speed_mps"],
+            "clock_offset_s": args.clock_offset,
+            "turnaround_s": one["turnaround_s"],
+            "decode": args.decode,
+            "turbo_passes": args.turbo_passes,
+            "config": one["config"],
+        }
+    header = {
+        "created_by": command_line(),
+        "clock_offset_s": args.clock_offset,
+        "decode": args.decode,
+        "turbo_passes": args.turbo_passes,
+        "segment_s": args.segment,
+    }
+    # what every recording shares goes in the header, as for a single recording
+    for key in ("sample_rate_hz", "sound_speed_mps", "turnaround_s", "config"):
+        values = [d[key] for d in described]
+        if values and all(v == values[0] for v in values):
+            header[key] = values[0]
+    return header
 
 
 def run(args: argparse.Namespace) -> int:
-    if wants_batch(args):
-        return run_batch(args)
-    args.recording = args.recording[0]
+    batch = len(args.recording) > 1 or any(getattr(args, name) not in (None, False) for name in BATCH_OPTIONS)
     out = check_writable(args.output)
     if out.suffix.lower() not in (".csv", ".jsonl"):
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+    if batch and args.plot:
+        raise SeamodemError("plot: figures are drawn for a single recording only (drop --plot, or give one file)")
+    if args.workers is not None and args.workers < 1:
+        raise SeamodemError(f"workers: must be >= 1, got {args.workers}")
     if args.turbo_passes < 1:
         raise SeamodemError(f"turbo-passes: must be >= 1, got {args.turbo_passes}")
-    info, _, config, emissions, pilot, payloads, sound_speed = _inputs(args)
-    if args.plot:
-        plot_dir = Path(args.plot)
-        if not plot_dir.is_dir():
-            raise SeamodemError(f"plot: folder {plot_dir} does not exist")
-    on_frame = _plotter(args, config, pilot, sound_speed) if args.plot else None
-    header = {
-        "created_by": command_line(),
-        "recording": str(args.recording),
-        "sample_rate_hz": info.samplerate,
-        "sound_speed_mps": sound_speed,
-        "clock_offset_s": args.clock_offset,
-        "turnaround_s": args.turnaround,
-        "decode": args.decode,
-        "turbo_passes": args.turbo_passes,
-        "config": config.to_dict(),
-    }
+    if args.plot and not Path(args.plot).is_dir():
+        raise SeamodemError(f"plot: folder {args.plot} does not exist")
+    return (_run_many if batch else _run_one)(args, out)
+
+
+def _run_one(args: argparse.Namespace, out: Path) -> int:
+    """One recording, streamed: records are written as frames are found."""
+    inputs = _inputs(args, args.recording[0])  # before the receiver's imports: a bad input fails at once
+
+    from ..receive.recording import receive_file
+    from ..receive.records import write_measurements
+    from ..receive.stream import ReceiverWarning
+
+    on_frame = _plotter(args, inputs) if args.plot else None
+    header = _header(args, [inputs], batch=False)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ReceiverWarning)
         records = receive_file(
-            args.recording,
-            config,
-            emissions=emissions,
+            inputs.path,
+            inputs.config,
+            emissions=inputs.emissions,
+            settings=inputs.settings,
             channel=args.channel,
-            progress=False if args.quiet else None,
-            sound_speed_mps=sound_speed,
-            clock_offset_s=args.clock_offset,
-            turnaround_s=args.turnaround,
-            v_max_mps=args.v_max,
-            false_alarms_per_hour=args.false_alarms_per_hour,
-            pilot=pilot,
+            pilot=inputs.pilot,
+            payloads=inputs.payloads,
             on_frame=on_frame,
-            decode=args.decode,
-            turbo_passes=args.turbo_passes,
-            payloads=payloads,
+            progress=False if args.quiet else None,
         )
         with atomic_outputs(out) as (tmp,):
             counted = _Counted(records)
@@ -218,13 +305,57 @@ def run(args: argparse.Namespace) -> int:
         if issubclass(w.category, ReceiverWarning):
             print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
     if not args.quiet:
-        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {sound_speed:g} m/s)")
+        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {inputs.settings.sound_speed_mps:g} m/s)")
         if args.decode and counted.decoded:
             line = f"payloads: {counted.crc_ok} of {counted.decoded} decoded frames pass the CRC"
             if counted.ber_frames:
                 line += f"; bit error rate {counted.ber_sum / counted.ber_frames:.2e} after decoding"
             print(line)
     return 0
+
+
+def _run_many(args: argparse.Namespace, out: Path) -> int:
+    """Several or long recordings, in parallel; 0 when all succeeded, 1 when any failed."""
+    from ..batch.decode import PartFailure, Recording, decode_files
+
+    recordings, failures, inputs = [], [], []
+    for path in args.recording:
+        try:
+            one = _inputs(args, path)
+        except SeamodemError as exc:
+            failures.append(PartFailure(str(path), str(exc)))
+            continue
+        inputs.append(one)
+        recordings.append(Recording(path, one.config, one.emissions, args.channel, one.settings, one.pilot, one.payloads))
+    result = decode_files(
+        recordings,
+        segment_s=args.segment,
+        overlap_s=args.overlap,
+        output=out,
+        header=_header(args, inputs, batch=True),
+        resume=args.resume,
+        backend="dask" if args.scheduler else "processes",
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.quiet else None,
+        failed=failures,
+    )
+    for note in dict.fromkeys(result.warnings):
+        print(f"seamodem rx: warning: {note}", file=sys.stderr)
+    for f in result.failures:
+        print(f"seamodem rx: failed: {f.label}: {f.error}", file=sys.stderr)
+    n = len(result.records)
+    if not args.quiet:
+        line = (
+            f"wrote {out}: {n} frame{'s' if n != 1 else ''} from {len(recordings)} recording"
+            f"{'s' if len(recordings) != 1 else ''} ({result.n_parts} parts"
+            + (f", {result.n_resumed} from an earlier run" if result.n_resumed else "")
+            + ")"
+        )
+        print(line)
+        if result.failures:
+            print(f"{len(result.failures)} failed (listed above); finished parts kept in {out.name}.parts/ for --resume")
+    return 0 if result.ok else 1
 
 
 class _Counted:
@@ -247,12 +378,13 @@ class _Counted:
             yield rec
 
 
-def _plotter(args, config, pilot, sound_speed):
+def _plotter(args, inputs: _Inputs):
     """on_frame callback that saves a figure of each of the first --plot-frames frames."""
     from ..receive.plots import plot_frame
     from ..transmit.pilot import pilot_symbols
 
-    symbols = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else pilot
+    config, sound_speed = inputs.config, inputs.settings.sound_speed_mps
+    symbols = pilot_symbols(config.n_pilot, config.pilot_seed) if inputs.pilot is None else inputs.pilot
     count = [0]
 
     def on_frame(m, bb, t0_s, fs):

@@ -5,15 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..config import DEFAULT_PAYLOAD_TEXT
 from ..errors import InputFileError
 from ..io.wav import SUBTYPES
-from ..transmit.beacon import (
-    DEFAULT_PAYLOAD_TEXT,
-    BeaconSchedule,
-    payloads_from_bytes,
-    payloads_from_text,
-    write_beacon,
-)
 from ._common import add_config_options, command_line, config_from_args, output_path
 
 
@@ -46,6 +40,8 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..transmit.beacon import BeaconSchedule, payloads_from_bytes, payloads_from_text, write_beacon
+
     out = output_path(args.output, ".wav")
     config = config_from_args(args)
     if args.payload_file:

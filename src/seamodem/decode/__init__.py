@@ -1,22 +1,29 @@
-"""Payload decoding: adaptive equalisation, soft demapping, deinterleaving, Viterbi, CRC."""
+"""Payload decoding blocks: adaptive equalisation, soft demapping, deinterleaving, Viterbi, BCJR, turbo, CRC.
 
+Pure functions of symbols and settings; they import nothing from
+:mod:`seamodem.receive` (which drives them on a measured frame in
+:mod:`seamodem.receive.demodulate`).
+"""
+
+from .bcjr import bcjr_decode
 from .demap import soft_demap
 from .equalizer import DfeResult, DfeSettings, dfe_equalize, mmse_dfe_taps
-from .frame import decode_frame, fractional_samples
-from .bcjr import bcjr_decode
 from .payload import DecodedPayload, code_order_llr, decode_payload
 from .turbo import TurboResult, estimate_channel, turbo_equalize
 from .viterbi import viterbi_decode
 
 __all__ = [
     "bcjr_decode",
-    "TurboResult",
-    "estimate_channel",
-    "turbo_equalize",
-    "decode_frame",
-    "fractional_samples",
+    "soft_demap",
     "DfeResult",
     "DfeSettings",
     "dfe_equalize",
     "mmse_dfe_taps",
-    "soft_demap", "DecodedPayload", "code_order_llr", "decode_payload", "viterbi_decode"]
+    "DecodedPayload",
+    "code_order_llr",
+    "decode_payload",
+    "TurboResult",
+    "estimate_channel",
+    "turbo_equalize",
+    "viterbi_decode",
+]

@@ -1,12 +1,17 @@
-"""WAV (and other audio) input and output through soundfile, with checked inputs."""
+"""WAV (and other audio) input and output through soundfile, with checked inputs.
+
+numpy and soundfile are imported by the functions that use them: the command
+line reads :data:`SUBTYPES` for its help without waiting for either.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable
+from typing import TYPE_CHECKING, Iterable
 
-import numpy as np
-import soundfile
+if TYPE_CHECKING:
+    import numpy as np
+    import soundfile
 
 from ..errors import InputFileError
 
@@ -22,6 +27,9 @@ def write_wav_blocks(path: str | Path, blocks: Iterable[np.ndarray], *, fs: int,
     ``subtype`` is a soundfile subtype (``"FLOAT"``, ``"PCM_16"``, ``"PCM_24"``);
     PCM values are clipped by soundfile at ±1 full scale.
     """
+    import numpy as np
+    import soundfile
+
     n = 0
     with soundfile.SoundFile(str(path), "w", samplerate=int(fs), channels=1, subtype=subtype, format="WAV") as f:
         for block in blocks:
@@ -58,6 +66,8 @@ def _check_riff_complete(path: Path) -> None:
 
 def wav_info(path: str | Path) -> soundfile._SoundFileInfo:
     """Header of an audio file, with a one-line error for a missing, empty, truncated or unreadable file."""
+    import soundfile
+
     path = Path(path)
     if not path.is_file():
         raise InputFileError(f"recording not found: {path}")
@@ -112,6 +122,9 @@ def read_wav(path: str | Path, *, channel: int | None = None) -> tuple[np.ndarra
         Missing, empty, truncated or unreadable file; no samples; NaN or
         infinite samples; a channel that does not exist.
     """
+    import numpy as np
+    import soundfile
+
     info, ch = wav_channel(path, channel=channel)
     try:
         data, fs = soundfile.read(str(path), dtype="float64", always_2d=True)

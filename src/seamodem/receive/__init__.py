@@ -1,58 +1,41 @@
-"""Receiver: front end, detection, time of flight, Doppler, compensation, measurement records.
+"""Receiver: front end, detection, time of flight, Doppler, demodulation, measurement records.
 
 From a hydrophone recording to one :class:`MeasurementRecord` per frame
-(SPEC §4): :func:`receive_file` (or :class:`Receiver` on blocks of samples)
-yields them as frames are found; :func:`write_measurements` /
-:func:`read_measurements` store them as CSV or JSON Lines;
-:func:`compensate_frame` returns a frame's Doppler-compensated symbols for the
-equaliser.
+(SPEC §4), one module per job: :mod:`.settings` (what the receiver is told),
+:mod:`.measure` (one frame's arrival, Doppler and SNR), :mod:`.stream`
+(the block-fed :class:`Receiver`), :mod:`.demodulate` (compensation,
+equalisation, payload), :mod:`.recording` (:func:`receive_file`).
+:func:`write_measurements` / :func:`read_measurements` store the records as
+CSV or JSON Lines.
+
+Names are imported on first use: ``seamodem.receive.settings`` alone (what the
+command line needs to check its options) does not bring in scipy or numba.
 """
 
-from .bounds import (
-    delay_crlb_s,
-    gabor_bandwidth_hz,
-    pilot_velocity_crlb_mps,
-    tone_c_n0_hz,
-    tone_frequency_crlb_hz,
-    tone_velocity_crlb_mps,
-)
-from .compensate import CompensatedFrame, compensate_frame
-from .detect import Detection, PilotDetector, pilot_template
-from .doppler import PilotFit, ToneFit, fit_pilot, matched_filter, tone_frequency_ml, tone_track_eq9
-from .frontend import FrontEnd, FrontEndPlan, plan_front_end
-from .receiver import Emissions, FrameMeasurement, Receiver, ReceiverWarning, measure_frame, receive_file
-from .records import MeasurementRecord, read_measurements, write_measurements
-from .two_way import two_way_range_m
+from .._lazy import exports, lazy_module
 
-__all__ = [
-    "delay_crlb_s",
-    "gabor_bandwidth_hz",
-    "pilot_velocity_crlb_mps",
-    "tone_c_n0_hz",
-    "tone_frequency_crlb_hz",
-    "tone_velocity_crlb_mps",
-    "CompensatedFrame",
-    "compensate_frame",
-    "Detection",
-    "PilotDetector",
-    "pilot_template",
-    "PilotFit",
-    "ToneFit",
-    "fit_pilot",
-    "matched_filter",
-    "tone_frequency_ml",
-    "tone_track_eq9",
-    "FrontEnd",
-    "FrontEndPlan",
-    "plan_front_end",
-    "Emissions",
-    "FrameMeasurement",
-    "Receiver",
-    "ReceiverWarning",
-    "measure_frame",
-    "receive_file",
-    "MeasurementRecord",
-    "read_measurements",
-    "write_measurements",
-    "two_way_range_m",
-]
+_EXPORTS = exports(
+    {
+        "bounds": (
+            "delay_crlb_s",
+            "gabor_bandwidth_hz",
+            "pilot_velocity_crlb_mps",
+            "tone_c_n0_hz",
+            "tone_frequency_crlb_hz",
+            "tone_velocity_crlb_mps",
+        ),
+        "compensate": ("CompensatedFrame", "compensate_frame"),
+        "demodulate": ("FrameDecode", "decode_frame", "decode_received", "demodulate", "fractional_samples"),
+        "detect": ("Detection", "PilotDetector", "pilot_template"),
+        "doppler": ("PilotFit", "ToneFit", "fit_pilot", "matched_filter", "tone_frequency_ml", "tone_track_eq9"),
+        "frontend": ("FrontEnd", "FrontEndPlan", "plan_front_end"),
+        "measure": ("FrameMeasurement", "measure_frame"),
+        "records": ("MeasurementRecord", "read_measurements", "write_measurements"),
+        "recording": ("receive_file",),
+        "settings": ("Emissions", "ReceiverSettings"),
+        "stream": ("Receiver", "ReceiverWarning"),
+        "two_way": ("two_way_range_m",),
+    }
+)
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_module(__name__, _EXPORTS, globals())

@@ -40,7 +40,10 @@ from ..config import FrameConfig
 from ..transmit.pilot import pilot_symbols
 from ..transmit.pulse import srrc_matrix
 
-__all__ = ["Detection", "PilotDetector", "doppler_bin_spacing_hz", "pilot_template", "z_threshold"]
+__all__ = ["Detection", "PilotDetector", "doppler_bin_spacing_hz", "pilot_template", "z_threshold", "DETECTION_CONTEXT_S"]
+
+#: the detector's noise context: correlation lags before the scan position whose median sets the noise level [s]
+DETECTION_CONTEXT_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -152,7 +155,7 @@ class PilotDetector:
         # less what the largest Doppler compression (twice, for margin) could take off
         self.holdoff = int(config.frame_duration_s * (1 - 2 * v_max_mps / sound_speed_mps) * fs)
         #: lags of context before the scan position for the noise median
-        self.context = int(0.5 * fs)
+        self.context = int(DETECTION_CONTEXT_S * fs)
 
     def _bank_power(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """|c_b[j]|² at every 4th lag of every bin b; each full-overlap lag's best bin and its power.

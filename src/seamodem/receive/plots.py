@@ -10,7 +10,7 @@ from ..config import FrameConfig
 from ..plots import _pyplot
 from .compensate import compensate_frame
 from .doppler import pilot_correlation
-from .receiver import FrameMeasurement
+from .measure import FrameMeasurement
 
 __all__ = ["plot_frame"]
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import __version__
 from .._progress import progress_bar
-from ..config import FrameConfig
+from ..config import DEFAULT_PAYLOAD_TEXT, FrameConfig
 from ..errors import ConfigError, InputFileError, PayloadError
 from ..io.files import atomic_outputs, check_writable
 from ..io.sidecar import SIDECAR_FORMAT, sidecar_path, sidecar_payloads, sidecar_pilot_bits, write_json
@@ -33,8 +33,6 @@ __all__ = [
     "write_beacon",
     "rebuild_from_sidecar",
 ]
-
-DEFAULT_PAYLOAD_TEXT = "seamodem frame {index}"
 
 
 @dataclass(frozen=True, kw_only=True)

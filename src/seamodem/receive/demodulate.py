@@ -1,17 +1,34 @@
-"""Decode one received frame: fractionally spaced samples from the receiver's Doppler compensation, then DFE / turbo."""
+"""Demodulation of a measured frame: Doppler compensation (eq 10–11), fractionally spaced samples,
+DFE / turbo equalisation and decoding (:mod:`seamodem.decode`), and the record's payload columns."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..config import FrameConfig
-from .equalizer import DfeSettings
-from .turbo import TurboResult, turbo_equalize
+from ..decode.equalizer import DfeSettings
+from ..decode.turbo import TurboResult, turbo_equalize
+from ..transmit.coding import encode_info, info_block
+from ..transmit.modulation import symbols_to_bits
+from .compensate import compensate_frame
+from .doppler import matched_filter
+from .measure import FrameMeasurement
+from .settings import ReceiverSettings
 
-__all__ = ["fractional_samples", "decode_frame", "decode_received", "FrameDecode", "channel_span_symbols", "dfe_for_span"]
+__all__ = [
+    "fractional_samples",
+    "decode_frame",
+    "decode_received",
+    "demodulate",
+    "payload_fields",
+    "FrameDecode",
+    "channel_span_symbols",
+    "dfe_for_span",
+]
 
 
 def fractional_samples(bb: np.ndarray, fs: float, t0_s: float, compensated, config: FrameConfig, sps: int = 2) -> np.ndarray:
@@ -37,8 +54,6 @@ def fractional_samples(bb: np.ndarray, fs: float, t0_s: float, compensated, conf
     Instants and phases between symbols are linearly interpolated (extrapolated
     past the last symbol), which is exact for a constant speed.
     """
-    from ..receive.doppler import matched_filter
-
     k = np.arange(compensated.times_s.size)
     frac = np.arange(sps * k.size) / sps
     slope_t = compensated.times_s[-1] - compensated.times_s[-2]
@@ -121,8 +136,6 @@ def dfe_for_span(span_symbols: int, *, base: DfeSettings = DfeSettings()) -> Dfe
     base : DfeSettings
         Algorithm, forgetting factor, step and PLL gains to keep.
     """
-    import dataclasses
-
     if span_symbols <= 1:
         return dataclasses.replace(base, n_ff=4 * base.sps, ff_centre=2 * base.sps, n_fb=2)
     return dataclasses.replace(
@@ -202,10 +215,6 @@ def decode_received(
         its least-squares line through ``v_mps`` (the frame's acceleration),
         not the constant ``v_mps``.
     """
-    from ..receive.compensate import compensate_frame
-    from ..transmit.coding import encode_info, info_block
-    from ..transmit.modulation import symbols_to_bits
-
     if track_t_s is not None and len(track_t_s) >= 8:
         # the eq 9 track smoothed to a straight line (constant acceleration over the frame),
         # through the mean speed v_mps: eq 10–11 driven by it
@@ -240,3 +249,62 @@ def decode_received(
         compensated=comp,
         equalized=res.dfe.soft[config.n_pilot :],
     )
+
+
+def demodulate(
+    m: FrameMeasurement,
+    bb: np.ndarray,
+    t0_s: float,
+    fs: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    settings: ReceiverSettings,
+    sent_payload: bytes | None = None,
+) -> FrameDecode | None:
+    """Payload of a measured frame, as ``settings`` ask (None when not decoding or the frame is cut).
+
+    Compensation runs at the frame's mean speed
+    (:attr:`FrameMeasurement.compensation_speed_mps`), along its eq 9 track when
+    ``settings.follow_track``.
+    """
+    if not settings.decode or not m.complete:
+        return None
+    return decode_received(
+        bb,
+        fs,
+        t0_s,
+        config=config,
+        pilot=pilot,
+        t_start_s=m.pilot.t_start_s,
+        v_mps=m.compensation_speed_mps,
+        sound_speed_mps=settings.sound_speed_mps,
+        settings=settings.equalizer,
+        passes=settings.turbo_passes,
+        sent_payload=sent_payload,
+        track_t_s=m.track_t_s if settings.follow_track else None,
+        track_v_mps=m.track_v_mps if settings.follow_track else None,
+    )
+
+
+def payload_fields(dec: FrameDecode | None) -> dict:
+    """The record's payload columns from a FrameDecode (or none, when the frame was not decoded)."""
+    if dec is None:
+        return {}
+    text = ""
+    if dec.crc_ok:
+        try:
+            text = dec.payload.decode("utf-8")
+        except UnicodeDecodeError:
+            text = ""
+        if not text.isprintable():
+            text = ""
+    return {
+        "crc_ok": dec.crc_ok,
+        "payload_hex": dec.payload.hex() if dec.crc_ok else "",
+        "payload_text": text,
+        "eq_snr_db": dec.eq_snr_db,
+        "decode_passes": dec.passes,
+        "ber": dec.ber,
+        "raw_ber": dec.raw_ber,
+    }

@@ -147,7 +147,7 @@ def ber_point(
     """
     from ..channel.scenario import parse_scenario
     from ..channel.simulate import simulate
-    from ..receive.receiver import Emissions, Receiver
+    from ..receive import Emissions, Receiver, ReceiverSettings
     from ..transmit.beacon import BeaconSchedule, render_beacon
     from ..transmit.pilot import pilot_bits as make_pilot_bits
 
@@ -169,15 +169,14 @@ def ber_point(
         band_hz=cfg.data_band_hz,
         reference_frequency_hz=cfg.carrier_hz,
     )
-    rx = Receiver(
-        cfg,
-        emissions=Emissions(times_s=emit),
+    settings = ReceiverSettings(
         sound_speed_mps=sc.sound_speed_mps,
         clock_offset_s=sc.clock.offset_s if sc.clock is not None else 0.0,
-        pilot=1.0 - 2.0 * bits.astype(float),
         decode=True,
         turbo_passes=passes,
-        payloads=payloads,
+    )
+    rx = Receiver(
+        cfg, emissions=Emissions(times_s=emit), settings=settings, pilot=1.0 - 2.0 * bits.astype(float), payloads=payloads
     )
     block = 1 << 20
     records = list(rx.run((sim.output[i : i + block] for i in range(0, sim.output.size, block)), fs=cfg.sample_rate_hz))

@@ -1,0 +1,163 @@
+"""What the receiver is told: its settings (one frozen object) and when frames were emitted."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError
+
+__all__ = ["ReceiverSettings", "Emissions"]
+
+
+def _positive(name: str, value) -> None:
+    if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise ConfigError(name, f"must be a positive number, got {value!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReceiverSettings:
+    """How a recording is received: built once (CLI, batch, sweeps, demo) and passed down.
+
+    Parameters
+    ----------
+    sound_speed_mps : float
+        c [m/s].
+    clock_offset_s : float
+        Receiver clock minus beacon clock [s], removed from the one-way tof.
+    turnaround_s : float, optional
+        Beacon's reply delay [s]: two-way ranging (paper 004 §III.B); the
+        emissions are then the vehicle's polls and the clock offset is not used.
+    v_max_mps : float
+        Largest |v_r| searched [m/s].
+    false_alarms_per_hour : float
+        Detector design rate in white noise (sets the threshold).
+    decode : bool
+        Also equalise and decode each complete frame's payload: compensation
+        (eq 10–11), fractionally spaced DFE with PLL, turbo passes while the
+        CRC fails. Fills the record's payload columns.
+    turbo_passes : int
+        Most equaliser passes per frame (1: DFE only).
+    follow_track : bool
+        Compensation follows the eq 9 speed track smoothed to its
+        least-squares line through the ML mean speed (the frame's
+        acceleration); False: the constant mean speed.
+    equalizer : DfeSettings, optional
+        A fixed equaliser; default: sized per frame to the delay spread
+        measured on the pilots (:func:`~seamodem.receive.demodulate.dfe_for_span`).
+
+    Examples
+    --------
+    >>> ReceiverSettings(sound_speed_mps=1480.0).v_max_mps
+    5.0
+    >>> ReceiverSettings(v_max_mps=-1)
+    Traceback (most recent call last):
+    ...
+    seamodem.errors.ConfigError: v_max: must be a positive number, got -1
+    """
+
+    sound_speed_mps: float = 1500.0
+    clock_offset_s: float = 0.0
+    turnaround_s: float | None = None
+    v_max_mps: float = 5.0
+    false_alarms_per_hour: float = 0.01
+    decode: bool = False
+    turbo_passes: int = 3
+    follow_track: bool = True
+    equalizer: Any = None
+
+    def __post_init__(self):
+        _positive("sound_speed", self.sound_speed_mps)
+        _positive("v_max", self.v_max_mps)
+        _positive("false_alarms_per_hour", self.false_alarms_per_hour)
+        if not (isinstance(self.clock_offset_s, (int, float)) and math.isfinite(self.clock_offset_s)):
+            raise ConfigError("clock_offset", f"must be finite, got {self.clock_offset_s!r}")
+        t = self.turnaround_s
+        if t is not None and not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0):
+            raise ConfigError("turnaround", f"must be >= 0, got {t!r}")
+        p = self.turbo_passes
+        if isinstance(p, bool) or not isinstance(p, int) or p < 1:
+            raise ConfigError("turbo_passes", f"must be an integer >= 1, got {p!r}")
+        for name in ("decode", "follow_track"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(name, f"must be true or false, got {getattr(self, name)!r}")
+
+    @property
+    def two_way(self) -> bool:
+        return self.turnaround_s is not None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain values (for headers and the identity of batch parts)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Emissions:
+    """When frames were emitted: an explicit list, or a PPS-synchronised period.
+
+    Parameters
+    ----------
+    times_s : numpy.ndarray, optional
+        Emission time of each frame (sidecar) [s], increasing; frame_index is
+        the position in this list.
+    start_s, period_s : float, optional
+        Frame k emitted at start + k·period (``--emit-start``, ``--emit-period``).
+
+    Examples
+    --------
+    >>> e = Emissions(start_s=0.5, period_s=3.0)
+    >>> e.frame_for(7.0)
+    (2, 6.5)
+    >>> e.shifted(6.0).frame_for(1.0)
+    (2, 0.5)
+    """
+
+    times_s: np.ndarray | None = None
+    start_s: float | None = None
+    period_s: float | None = None
+
+    def __post_init__(self):
+        if self.times_s is None:
+            if self.start_s is None or self.period_s is None:
+                raise ConfigError("emissions", "give emission times, or both start and period")
+            if not (math.isfinite(self.period_s) and self.period_s > 0):
+                raise ConfigError("emit_period", f"must be > 0, got {self.period_s!r}")
+            if not math.isfinite(self.start_s):
+                raise ConfigError("emit_start", f"must be finite, got {self.start_s!r}")
+        else:
+            times = np.asarray(self.times_s, dtype=float)
+            if times.ndim != 1 or times.size == 0 or np.any(np.diff(times) <= 0) or not np.all(np.isfinite(times)):
+                raise ConfigError("emissions", "emission times must be a non-empty increasing list of finite numbers")
+            object.__setattr__(self, "times_s", times)
+
+    def frame_for(self, t_s: float) -> tuple[int, float]:
+        """(frame_index, t_emit_s) of the latest emission at or before ``t_s``; (−1, nan) if none."""
+        slack = 1e-6  # a frame heard at tof ≈ 0 may measure a hair early
+        if self.times_s is None:
+            k = math.floor((t_s - self.start_s + slack) / self.period_s)
+            return (k, self.start_s + k * self.period_s) if k >= 0 else (-1, math.nan)
+        k = int(np.searchsorted(self.times_s, t_s + slack, side="right")) - 1
+        return (k, float(self.times_s[k])) if k >= 0 else (-1, math.nan)
+
+    def time_of(self, frame_index: int) -> float:
+        """Emission time of frame ``frame_index`` [s] (nan for −1, no emission)."""
+        if frame_index < 0:
+            return math.nan
+        if self.times_s is None:
+            return self.start_s + frame_index * self.period_s
+        return float(self.times_s[frame_index])
+
+    def shifted(self, t0_s: float) -> Emissions:
+        """The same emissions on a clock whose zero is at ``t0_s`` (a segment of a recording)."""
+        if t0_s == 0:
+            return self
+        if self.times_s is None:
+            return Emissions(start_s=self.start_s - t0_s, period_s=self.period_s)
+        return Emissions(times_s=self.times_s - t0_s)
+
+    def to_list(self) -> list:
+        """Plain values (for the identity of batch parts)."""
+        return [None if self.times_s is None else self.times_s.tolist(), self.start_s, self.period_s]

@@ -1,0 +1,220 @@
+"""The streaming receiver: passband blocks in, one measurement record per frame out, memory bounded.
+
+Pipeline (paper 000 Fig. 4, SPEC §4): front end (:mod:`.frontend`) → pilot
+detection with a stated false-alarm rate and first-arrival logic
+(:mod:`.detect`) → measurement of each frame (:mod:`.measure`) →
+demodulation when asked (:mod:`.demodulate`) → record (:mod:`.records`).
+
+The front end holds a few FFT blocks, the receiver the basebands of about one
+frame plus one second of detection context, however long the recording.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+
+import numpy as np
+
+from ..config import FrameConfig
+from ..transmit.pilot import pilot_symbols
+from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
+from .demodulate import demodulate, payload_fields
+from .detect import Detection, PilotDetector
+from .frontend import FrontEnd, FrontEndPlan, plan_front_end
+from .measure import NOISE_GAP_S, NOISE_WINDOW_S, FrameMeasurement, frame_span_s, measure_frame
+from .records import MeasurementRecord
+from .settings import Emissions, ReceiverSettings
+from .two_way import two_way_range_m
+
+__all__ = ["Receiver", "ReceiverWarning"]
+
+
+class ReceiverWarning(UserWarning):
+    """A degraded but usable result (clipped input, no frame found, truncated frame...)."""
+
+
+class Receiver:
+    """Streaming receiver: feed passband blocks, get measurement records.
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The transmitted frame (pilot, tone, symbol rate).
+    emissions : Emissions
+        When frames (or, two-way, polls) were emitted.
+    settings : ReceiverSettings
+        Sound speed, clock offset, turnaround, v_max, false-alarm rate,
+        decoding and equaliser (default: ``ReceiverSettings()``).
+    pilot : numpy.ndarray, optional
+        Pilot symbols (default: from the config's seed).
+    payloads : sequence of bytes, optional
+        The payload sent in each frame, by frame_index (from the sidecar), to
+        count bit errors when decoding.
+    on_frame : callable, optional
+        Called with (FrameMeasurement, bb, bb_t0_s, fs_bb) for every frame:
+        the data baseband around it, its first sample's time [s] and its
+        rate [Hz], e.g. to plot the frame or to compensate it.
+
+    Examples
+    --------
+    >>> from seamodem import get_preset
+    >>> cfg = get_preset("jmse2024")
+    >>> rx = Receiver(cfg, emissions=Emissions(start_s=0.0, period_s=3.0))
+    >>> list(rx.run([np.zeros(96153)], fs=96153))
+    []
+    """
+
+    def __init__(
+        self,
+        config: FrameConfig,
+        *,
+        emissions: Emissions,
+        settings: ReceiverSettings | None = None,
+        pilot: np.ndarray | None = None,
+        payloads=None,
+        on_frame: Callable | None = None,
+    ):
+        self.config = config
+        self.emissions = emissions
+        self.settings = ReceiverSettings() if settings is None else settings
+        self.pilot = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else np.asarray(pilot, complex)
+        self.payloads = None if payloads is None else list(payloads)
+        self.on_frame = on_frame
+
+    def _record(self, m: FrameMeasurement, bb: np.ndarray, t0_s: float, fs: float) -> MeasurementRecord:
+        s = self.settings
+        c = s.sound_speed_mps
+        t_arr = m.pilot.t_start_s
+        if s.turnaround_s is None:
+            k, t_emit = self.emissions.frame_for(t_arr - s.clock_offset_s)
+            tof = t_arr - t_emit - s.clock_offset_s
+        else:
+            k, t_emit = self.emissions.frame_for(t_arr - s.turnaround_s)
+            tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
+        sigma_tau = float(delay_crlb_s(self.config, m.pilot.snr_db))
+        if s.turnaround_s is not None:
+            sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
+        sent = None
+        if self.payloads is not None and 0 <= k < len(self.payloads):
+            sent = self.payloads[k]
+        dec = demodulate(m, bb, t0_s, fs, config=self.config, pilot=self.pilot, settings=s, sent_payload=sent)
+        return MeasurementRecord(
+            frame_index=int(k),
+            t_emit_s=float(t_emit),
+            t_arrival_s=float(t_arr),
+            tof_s=float(tof),
+            range_m=float(c * tof),
+            v_r_mps=m.v_tone_ml_mps,
+            snr_db=float(m.pilot.snr_db),
+            v_r_tone_eq9_mps=m.v_tone_eq9_mps,
+            v_r_bank_mps=float(m.pilot.v_mps),
+            detection_z=m.detection.z,
+            detection_rho=m.detection.rho,
+            sigma_range_m=c * sigma_tau,
+            sigma_v_r_mps=float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)),
+            sigma_v_r_bank_mps=float(pilot_velocity_crlb_mps(self.config, m.pilot.snr_db, sound_speed_mps=c)),
+            tone_c_n0_dbhz=10 * math.log10(max(m.tone.c_n0_hz, 1e-30)),
+            two_way=s.turnaround_s is not None,
+            **payload_fields(dec),
+        )
+
+    def run(self, blocks: Iterable[np.ndarray], *, fs: float) -> Iterator[MeasurementRecord]:
+        """Records of the frames in consecutive real passband ``blocks`` at rate ``fs``, as found."""
+        cfg, s = self.config, self.settings
+        plan = plan_front_end(cfg, fs, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
+        fe = FrontEnd(plan)
+        det = PilotDetector(
+            cfg,
+            plan.fs_data,
+            v_max_mps=s.v_max_mps,
+            sound_speed_mps=s.sound_speed_mps,
+            false_alarms_per_hour=s.false_alarms_per_hour,
+            pilot=self.pilot,
+        )
+        self.plan, self.detector = plan, det
+        span = frame_span_s(cfg, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
+        state = _Buffers()
+        scan_from = 0
+        pending: list[Detection] = []
+        for block in blocks:
+            state.append(*fe.push(block))
+            found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=False)
+            pending.extend(found)
+            yield from self._measure_ready(pending, state, plan, span, final=False)
+            oldest = min(
+                [scan_from - det.context - det.length]
+                + [int((d.t_start_s - NOISE_GAP_S - NOISE_WINDOW_S) * plan.fs_data) - 64 for d in pending]
+            )
+            state.trim(oldest, plan)
+        state.append(*fe.flush())
+        found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=True)
+        pending.extend(found)
+        yield from self._measure_ready(pending, state, plan, span, final=True)
+
+    def _measure_ready(
+        self, pending: list[Detection], state: _Buffers, plan: FrontEndPlan, span_s: float, *, final: bool
+    ) -> Iterator[MeasurementRecord]:
+        """Records of the pending detections whose whole span has arrived (all of them when ``final``).
+
+        The detections measured are removed from ``pending``; the others wait for more samples.
+        """
+        t_end = min(state.bb_end / plan.fs_data, state.tone_end / plan.fs_tone)
+        ready = [d for d in pending if final or d.t_start_s + span_s <= t_end]
+        pending[:] = [d for d in pending if not (final or d.t_start_s + span_s <= t_end)]
+        bb_t0 = state.bb_start / plan.fs_data
+        for d in ready:
+            m = measure_frame(
+                state.bb,
+                state.tone,
+                d,
+                plan=plan,
+                config=self.config,
+                pilot=self.pilot,
+                sound_speed_mps=self.settings.sound_speed_mps,
+                v_max_mps=self.settings.v_max_mps,
+                bb_t0_s=bb_t0,
+                tone_t0_s=state.tone_start / plan.fs_tone,
+            )
+            if not m.complete:
+                warnings.warn(
+                    f"frame at {m.pilot.t_start_s:.3f} s is cut by the end of the recording: "
+                    "its Doppler uses the part received",
+                    ReceiverWarning,
+                    stacklevel=3,
+                )
+            if self.on_frame is not None:
+                self.on_frame(m, state.bb, bb_t0, plan.fs_data)
+            yield self._record(m, state.bb, bb_t0, plan.fs_data)
+
+
+class _Buffers:
+    """Recent data and tone baseband samples with their global start indices."""
+
+    def __init__(self):
+        self.bb = np.zeros(0, complex)
+        self.tone = np.zeros(0, complex)
+        self.bb_start = 0
+        self.tone_start = 0
+
+    @property
+    def bb_end(self) -> int:
+        return self.bb_start + len(self.bb)
+
+    @property
+    def tone_end(self) -> int:
+        return self.tone_start + len(self.tone)
+
+    def append(self, bb, tone):
+        self.bb = np.concatenate([self.bb, bb])
+        self.tone = np.concatenate([self.tone, tone])
+
+    def trim(self, oldest_bb: int, plan: FrontEndPlan):
+        cut = max(0, oldest_bb - self.bb_start)
+        self.bb = self.bb[cut:]
+        self.bb_start += cut
+        oldest_tone = int(math.floor(self.bb_start * plan.data.decimation / plan.tone.decimation))
+        cut = max(0, oldest_tone - self.tone_start)
+        self.tone = self.tone[cut:]
+        self.tone_start += cut
