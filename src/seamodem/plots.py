@@ -9,7 +9,7 @@ import numpy as np
 from .config import FrameConfig
 from .errors import SeamodemError
 
-__all__ = ["plot_recording", "envelope"]
+__all__ = ["plot_recording", "envelope", "save_figure"]
 
 
 def _pyplot():
@@ -19,6 +19,12 @@ def _pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def save_figure(fig, path: str | Path, *, dpi: int = 100) -> None:
+    """Write ``fig`` as a PNG at ``path`` and release it (every figure the package draws ends here)."""
+    fig.savefig(str(path), dpi=dpi, format="png")
+    _pyplot().close(fig)
 
 
 def envelope(x: np.ndarray, n_bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,5 +94,4 @@ def plot_recording(
     level = 10 * np.log10(np.maximum(sxx / max(np.max(sxx), 1e-300), 1e-12))  # silent guards drawn at -120 dB
     axes[2].pcolormesh(start_s + ts_, fs_, level, shading="auto", cmap="viridis", vmin=-120, vmax=0)
     axes[2].set(xlabel="time [s]", ylabel="frequency [Hz]", title="spectrogram")
-    fig.savefig(str(path), dpi=100, format="png")
-    plt.close(fig)
+    save_figure(fig, path)

@@ -153,7 +153,7 @@ def plot_ber(path, points, config, *, title: str = "") -> None:
     """BER (raw and decoded) and FER (DFE, turbo) against SNR, with the uncoded AWGN theory."""
     import numpy as np
 
-    from ..plots import _pyplot
+    from ..plots import _pyplot, save_figure
     from ..studies.ber import theory_ber
 
     plt = _pyplot()
@@ -184,5 +184,4 @@ def plot_ber(path, points, config, *, title: str = "") -> None:
     b.legend(fontsize=8)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.savefig(path, format="png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

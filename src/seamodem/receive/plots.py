@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import FrameConfig
-from ..plots import _pyplot
+from ..plots import _pyplot, save_figure
 from .compensate import compensate_frame
 from .doppler import pilot_correlation
 from .measure import FrameMeasurement
@@ -61,5 +61,4 @@ def plot_frame(
         a.plot(data.real, data.imag, ".", ms=2)
         a.set(xlabel="I", ylabel="Q", title=title, aspect="equal", xlim=(-2, 2), ylim=(-2, 2))
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path)
