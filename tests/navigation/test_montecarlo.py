@@ -71,7 +71,7 @@ def test_monte_carlo_rows_seeded_and_formatted():
     assert {(r["tcom_s"], r["filter"]) for r in a.rows} == {(3.0, "proposed"), (3.0, "rosb"), (6.0, "proposed"), (6.0, "rosb")}
     assert a.mean_error_curve[(3.0, "proposed")].shape == a.t_s.shape
     text = format_table(a)
-    assert "Table 3" in text and "Table 4" in text and "noise: range 3.46 m" in text
+    assert "Table 3" in text and "per estimator" in text and "noise: range 3.46 m" in text
 
 
 def test_config_errors_name_the_parameter():

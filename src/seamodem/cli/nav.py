@@ -13,7 +13,11 @@ from ..errors import SeamodemError
 from ..io.files import atomic_outputs
 from ._common import command_line
 
-TABLE_COLUMNS = ("tcom_s", "filter", "mean_error_m", "error_variance_m2", "etd_max_pct", "etd_mean_pct", "outliers")
+TABLE_COLUMNS = ("tcom_s", "filter", "mean_error_m", "error_variance_m2", "etd_max_pct", "etd_mean_pct", "outliers",
+                 "diverged", "median_error_m")
+
+#: ``nav simulate``'s estimators by their command-line names (hyphens) and table names (underscores).
+SIM_FILTERS = ("inertial", "inertial-range", "fixed-lag", "batch", "proposed", "rosb")
 
 
 def add_parser(sub) -> None:
@@ -23,19 +27,33 @@ def add_parser(sub) -> None:
 
     s = nav.add_parser(
         "simulate",
-        help="reproduce paper 000 Tables 3-4 (proposed EKF vs ROSB) by Monte Carlo",
+        help="Monte Carlo of paper 000's mission: the inertial filter and smoothers, or the paper's filters",
         description=(
-            "Simulate RUNS boustrophedon missions per T_com (paper 000 §4.1), print Tables 3 and 4 beside the "
-            "paper's values and write DIR/table.csv, DIR/table.txt, DIR/config.json and the figures "
-            "DIR/fig7_top_view.png, DIR/fig8_error.png."
+            "Simulate RUNS boustrophedon missions per T_com (paper 000 §4.1) for each estimator, print the mean "
+            "position error per T_com beside the paper's Table 3-4 values, with outliers and diverged runs "
+            "counted, and write DIR/table.csv, DIR/table.txt, DIR/config.json and the figures "
+            "DIR/fig7_top_view.png, DIR/fig8_error.png. Default: the inertial filter with and without v_r, "
+            "the controller steering on the estimate. --paper runs the paper-faithful reproduction "
+            "(paper 000's EKF and ROSB, eq 25, steering on the truth)."
         ),
     )
     s.add_argument("--tcom", type=float, nargs="+", default=[3, 6, 9, 12, 15, 20], metavar="S",
                    help="communication periods T_com [s] (default 3 6 9 12 15 20)")
     s.add_argument("--runs", type=int, default=300, help="missions per row (default 300)")
     s.add_argument("--seed", type=int, default=0, help="seed; run r uses default_rng([seed, r]) (default 0)")
-    s.add_argument("--steer", choices=("estimate", "truth"), default="estimate",
-                   help="the controller steers on the filter's estimate (a real vehicle, default) or on the truth")
+    s.add_argument("--filters", nargs="+", choices=SIM_FILTERS, metavar="NAME",
+                   help="estimators: " + ", ".join(SIM_FILTERS) + " (default: inertial inertial-range; "
+                        "fixed-lag and batch smooth the inertial filter's mission; proposed and rosb are paper "
+                        "000's EKFs)")
+    s.add_argument("--paper", action="store_true",
+                   help="paper-faithful reproduction of Tables 3-4: --filters proposed rosb --steer truth")
+    s.add_argument("--steer", choices=("estimate", "truth"),
+                   help="the controller steers on the filter's estimate (a real vehicle; default) or on the truth "
+                        "(default with --paper)")
+    s.add_argument("--bias-model", choices=("random_walk", "drift"), default="random_walk",
+                   help="heading bias of 5 deg/h as a random walk (default) or a constant drift rate per run")
+    s.add_argument("--lag", type=float, default=10.0, metavar="S",
+                   help="latency of the fixed-lag smoother [s] (default 10)")
     s.add_argument("--sigma-range", type=float, metavar="M", help="emulated range noise [m] (default √12 = 3.46)")
     s.add_argument("--sigma-vr", type=float, metavar="MPS", help="emulated v_r noise [m/s] (default √0.2 = 0.447)")
     s.add_argument("--matched-r", action="store_true",
@@ -60,29 +78,71 @@ def add_parser(sub) -> None:
         "track",
         help="estimate a track from the receiver's measurement CSV and an IMU/AHRS CSV",
         description=(
-            "Run the 6-state EKF of paper 000 (or ROSB) on measurement records (columns frame_index, t_emit_s, "
-            "t_arrival_s, tof_s, range_m, v_r_mps, snr_db, optional range_std_m, v_r_std_mps) and IMU samples "
-            "(columns t_s, heading_rad, omega_rad_s, accel_mps2). Writes OUT.csv (t_s, x_m, y_m, heading_rad, "
-            "speed_mps, covariance of x and y), OUT.png and, with --truth, error statistics in OUT.json."
+            "Estimate the vehicle's track from measurement records (columns frame_index, t_emit_s, t_arrival_s, "
+            "tof_s, range_m, v_r_mps, snr_db, optional sigma_range_m, sigma_v_r_mps) and IMU/AHRS samples at any "
+            "time stamps (columns t_s, heading_rad or heading_deg, omega_rad_s, accel_mps2). Default: the inertial "
+            "filter (heading bias as a state, process noise from the IMU's noise densities, each frame's own σ "
+            "raised to a floor, chi2-gated frames reported). Writes OUT.csv (t_s, x_m, y_m, heading_rad, "
+            "speed_mps, bias_rad, var_x_m2, cov_xy_m2, var_y_m2), OUT_frames.csv (each frame: accepted, gated or "
+            "outside the IMU's span, its NIS), OUT.png (track with 2-σ ellipses) and OUT.json (configuration, "
+            "error statistics with --truth). --filter proposed/rosb run paper 000's EKF exactly as published."
         ),
     )
     t.add_argument("measurements", metavar="MEAS.csv")
-    t.add_argument("--imu", required=True, metavar="IMU.csv", help="IMU/AHRS samples, sorted by t_s")
+    t.add_argument("--imu", required=True, metavar="IMU.csv", help="IMU/AHRS samples (any time stamps)")
     t.add_argument("--beacon", required=True, metavar="X,Y",
                    help="beacon position: local x,y [m], or lat,lon [deg] with --geodetic")
     t.add_argument("--geodetic", action="store_true",
                    help="--beacon and --start are lat,lon; the output adds lat_deg, lon_deg")
     t.add_argument("--start", required=True, metavar="X,Y", help="initial position (GNSS fix before diving)")
     t.add_argument("--start-speed", type=float, default=0.0, metavar="MPS", help="initial speed [m/s] (default 0)")
-    t.add_argument("--depth", type=float, nargs=2, metavar=("VEHICLE", "BEACON"),
-                   help="known depths [m]: slant ranges become horizontal (paper 004 eq 10)")
-    t.add_argument("--filter", choices=("proposed", "rosb"), default="proposed", help="with or without v_r")
+    t.add_argument("--start-sigma", type=float, default=1.0, metavar="M",
+                   help="1-σ error of --start per axis [m] (default 1: a GNSS fix; inertial filters)")
+    t.add_argument("--fixes", metavar="FIXES.csv",
+                   help="GNSS fixes at the surface: t_s and x_m,y_m (or lat_deg,lon_deg with --geodetic), "
+                        "optional sigma_m (default 3 m); inertial filters")
+    depth = t.add_mutually_exclusive_group()
+    depth.add_argument("--depth", type=float, nargs=2, metavar=("VEHICLE", "BEACON"),
+                       help="known depths [m]: slant ranges become horizontal (paper 004 eq 10)")
+    depth.add_argument("--depth-log", metavar="DEPTH.csv",
+                       help="vehicle depth log (t_s, depth_m): each frame's slant range becomes horizontal with "
+                            "the depth at its arrival and --beacon-depth")
+    t.add_argument("--beacon-depth", type=float, default=0.0, metavar="M",
+                   help="beacon depth [m] with --depth-log (default 0)")
+    t.add_argument("--filter", choices=("inertial", "inertial-range", "proposed", "rosb"), default="inertial",
+                   help="inertial (range and v_r, default), inertial-range (range only), or paper 000's EKF "
+                        "'proposed' / its range-only baseline 'rosb' (paper-faithful: R of eq 25, Q = Δt⁸)")
+    smooth = t.add_mutually_exclusive_group()
+    smooth.add_argument("--smooth", action="store_true",
+                        help="post-process: batch smoother over the whole mission (paper filters: RTS)")
+    smooth.add_argument("--fixed-lag", type=float, metavar="S",
+                        help="fixed-lag smoother: each state uses the frames up to S seconds later (inertial)")
+    t.add_argument("--sigma-range", type=float, metavar="M",
+                   help="σ of every range [m], overriding the records' (default: each record's σ, or 0.05 when "
+                        "the records carry none)")
+    t.add_argument("--sigma-vr", type=float, metavar="MPS",
+                   help="σ of every v_r [m/s], overriding the records' (default: each record's σ, or 0.05)")
+    t.add_argument("--range-floor", type=float, default=0.01, metavar="M",
+                   help="floor of the records' range σ [m] (default 0.01: clock sync, sound speed; see docs)")
+    t.add_argument("--vr-floor", type=float, default=0.01, metavar="MPS",
+                   help="floor of the records' v_r σ [m/s] (default 0.01)")
     t.add_argument("--r-from-records", action="store_true",
-                   help="use each record's range_std_m and v_r_std_mps as R (SNR-dependent) instead of eq 25")
-    t.add_argument("--smooth", action="store_true",
-                   help="post-process: Rauch-Tung-Striebel smoothing of the whole track (uses later frames too)")
+                   help="paper filters: R from each record's σ instead of eq 25 (the inertial filters do it by "
+                        "default; accepted and ignored for them)")
+    t.add_argument("--gyro-arw", type=float, metavar="RAD/√S",
+                   help="gyro angle random walk [rad/√s] (default 0.0354: the paper's IMU)")
+    t.add_argument("--accel-vrw", type=float, metavar="MPS/√S",
+                   help="accelerometer velocity random walk [m/s/√s] (default 0.0354: the paper's IMU)")
+    t.add_argument("--heading-sigma-deg", type=float, metavar="DEG",
+                   help="white noise of the heading sensor [deg] (default 1)")
+    t.add_argument("--bias-instability-deg-h", type=float, metavar="DEG/H",
+                   help="heading bias random walk, as degrees after one hour (default 5)")
+    t.add_argument("--estimate", nargs="+", choices=("bias-drift", "current", "range-scale"), default=(),
+                   metavar="STATE",
+                   help="extra states of the inertial filter: bias-drift, current (2 states), range-scale")
     t.add_argument("--truth", metavar="TRUTH.csv", help="true track (t_s, x_m, y_m) for error statistics")
-    t.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="track output; OUT.png beside it")
+    t.add_argument("-o", "--output", required=True, metavar="OUT.csv",
+                   help="track output; OUT_frames.csv, OUT.png and OUT.json beside it")
     t.set_defaults(run=run_track)
 
 
@@ -99,23 +159,30 @@ def run_simulate(args: argparse.Namespace) -> int:
         raise SeamodemError(f"--workers: must be >= 1, got {args.workers}")
     if args.seed < 0:
         raise SeamodemError(f"--seed: must be >= 0, got {args.seed}")
-    noise = NoiseModel()
+    filters = tuple(f.replace("-", "_") for f in (args.filters or (("proposed", "rosb") if args.paper
+                                                                   else ("inertial", "inertial-range"))))
+    steer = args.steer or ("truth" if args.paper else "estimate")
+    noise = NoiseModel(heading_bias_model=args.bias_model)
     if args.sigma_range is not None:
         noise = replace(noise, sigma_range_m=args.sigma_range)
     if args.sigma_vr is not None:
         noise = replace(noise, sigma_vr_mps=args.sigma_vr)
-    config = MissionConfig(noise=noise, steer_on_estimate=args.steer == "estimate", q=args.q,
-                           error_of=args.error_of.replace("-", "_"))
+    error_of = args.error_of.replace("-", "_")
+    if error_of != "estimate" and any(f not in ("proposed", "rosb") for f in filters):
+        raise SeamodemError("--error-of: applies to the paper's filters only (the inertial filter has "
+                            "--filters fixed-lag batch)")
+    config = MissionConfig(noise=noise, steer_on_estimate=steer == "estimate", q=args.q, error_of=error_of,
+                           lag_s=args.lag)
     if args.matched_r:
         config = replace(config, r_diag=(noise.sigma_range_m**2, noise.sigma_vr_mps**2, *config.r_diag[2:]))
     for t in args.tcom:
         replace(config, tcom_s=t)  # validates every T_com before any work
     out.mkdir(parents=True, exist_ok=True)
-    total = 2 * len(args.tcom) * args.runs
+    total = len(filters) * len(args.tcom) * args.runs
     with progress_bar(total=total, desc="missions", enabled=False if args.quiet else None) as bar:
         backend = "dask" if args.scheduler else (None if args.backend == "threads" else args.backend)
         result = run_monte_carlo(config, tcoms=tuple(args.tcom), runs=args.runs, seed=args.seed,
-                                 workers=args.workers, progress=bar.update, backend=backend,
+                                 filters=filters, workers=args.workers, progress=bar.update, backend=backend,
                                  scheduler=args.scheduler)
     text = format_table(result)
     print(text)
@@ -127,7 +194,9 @@ def run_simulate(args: argparse.Namespace) -> int:
                 writer.writerow({k: row[k] for k in TABLE_COLUMNS})
         Path(ttxt).write_text(text + "\n", encoding="utf-8")
         Path(tjson).write_text(json.dumps({"command": command_line(), "runs": args.runs, "seed": args.seed,
-                                           "tcom_s": list(result.tcoms), "mission": asdict(config)}, indent=1,
+                                           "tcom_s": list(result.tcoms), "filters": list(filters),
+                                           "mission": asdict(config),
+                                           "inertial_filter": asdict(config.inertial_config)}, indent=1,
                                           default=str) + "\n", encoding="utf-8")
     plot_top_view(result, out / "fig7_top_view.png")
     plot_error_curves(result, out / "fig8_error.png")
@@ -135,21 +204,60 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 
 def run_track(args: argparse.Namespace) -> int:
+    import math
+    import sys
+    import warnings
+
+    from ..navigation.geometry import CoordinateWarning
+    from ..navigation.inertial import InertialConfig
+    from ..navigation.logs import LogWarning
     from ..navigation.track import track_from_files
 
-    summary = track_from_files(
-        args.measurements,
-        args.imu,
-        beacon=args.beacon,
-        start=args.start,
-        start_speed_mps=args.start_speed,
-        geodetic=args.geodetic,
-        depths=args.depth,
-        filter=args.filter,
-        r_from_records=args.r_from_records,
-        smooth=args.smooth,
-        truth=args.truth,
-        output=args.output,
-    )
+    overrides = {}
+    for name, value in (("gyro_arw", args.gyro_arw), ("accel_vrw", args.accel_vrw)):
+        if value is not None:
+            overrides[name] = value
+    if args.heading_sigma_deg is not None:
+        overrides["heading_sigma_rad"] = math.radians(args.heading_sigma_deg)
+    if args.bias_instability_deg_h is not None:
+        overrides["bias_rw"] = math.radians(args.bias_instability_deg_h) / 60.0  # σ after 3600 s = value
+    for state in args.estimate:
+        overrides["estimate_" + state.replace("-", "_")] = True
+    smooth = "batch" if args.smooth else ("fixed-lag" if args.fixed_lag is not None else None)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            summary = track_from_files(
+                args.measurements,
+                args.imu,
+                beacon=args.beacon,
+                start=args.start,
+                start_speed_mps=args.start_speed,
+                start_sigma_m=args.start_sigma,
+                geodetic=args.geodetic,
+                depths=args.depth,
+                depth_log=args.depth_log,
+                beacon_depth_m=args.beacon_depth,
+                fixes=args.fixes,
+                filter=args.filter,
+                r_from_records=args.r_from_records,
+                smooth=smooth,
+                lag_s=args.fixed_lag,
+                config=InertialConfig(**overrides),
+                range_floor_m=args.range_floor,
+                v_r_floor_mps=args.vr_floor,
+                sigma_range_m=args.sigma_range,
+                sigma_v_r_mps=args.sigma_vr,
+                truth=args.truth,
+                command=command_line(),
+                output=args.output,
+            )
+        finally:
+            # what the readers repaired: one line each on stderr (also when the run then fails)
+            for w in caught:
+                if issubclass(w.category, (LogWarning, CoordinateWarning)):
+                    print(f"seamodem nav track: warning: {str(w.message).splitlines()[0]}", file=sys.stderr)
+                else:
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     print(summary)
     return 0

@@ -83,7 +83,7 @@ def _wrap(angle):
 
 @njit(cache=True, nogil=True)
 def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt, q, com_every,
-                   use_vr, steer_on_estimate, v_min, v_max, omega_max, accel_max, history):
+                   use_vr, steer_on_estimate, v_min, v_max, omega_max, accel_max, history, bias_rate=0.0):
     """Run one mission of paper 000's simulation; return the position error and both tracks.
 
     Parameters
@@ -122,6 +122,9 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
         ``[:, 2:8]`` prior covariance, ``[:, 8:14]`` posterior covariance,
         ``[:, 14:20]`` the transition Jacobian F from step k − 1 to k
         (row i of each matrix in ``history[k, i]``). Step 0 has prior = posterior, F = I.
+    bias_rate : float
+        Heading-bias drift rate [rad/s] added to the random walk (``NoiseModel(heading_bias_model="drift")``);
+        0 leaves every number of the paper's reproduction as it was (x + 0.0 = x).
 
     Returns
     -------
@@ -168,7 +171,7 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
                 for j in range(6):
                     history[k, i, 2 + j] = P[i, j]
                     history[k, i, 14 + j] = F[i, j]
-        bias += sigmas[3] * noise[k, 3]
+        bias += sigmas[3] * noise[k, 3] + bias_rate * dt
         rows = 0
         for i in range(5):
             for j in range(6):

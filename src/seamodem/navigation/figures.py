@@ -13,8 +13,21 @@ from ..plots import _pyplot
 __all__ = ["plot_top_view", "plot_error_curves", "plot_track", "error_ellipses"]
 
 
-def plot_top_view(result, path: str | Path, *, filter: str = "proposed", n_tcom: int = 4) -> None:
-    """Fig. 7: the true track and the run-averaged estimated tracks of the ``n_tcom`` shortest T_com."""
+def _filters_run(result) -> list:
+    seen = []
+    for _, f in result.mean_track:
+        if f not in seen:
+            seen.append(f)
+    return seen
+
+
+def plot_top_view(result, path: str | Path, *, filter: str | None = None, n_tcom: int = 4) -> None:
+    """Fig. 7: the true track and the run-averaged estimated tracks of the ``n_tcom`` shortest T_com.
+
+    ``filter`` defaults to the first estimator of the result. Runs that diverged or are outliers are left
+    out of the mean (the title says how many runs it averages).
+    """
+    filter = filter or _filters_run(result)[0]
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5, 7))
     ax.plot(*result.truth_track.T, "k", lw=1.5, label="actual (last run)")
@@ -26,16 +39,20 @@ def plot_top_view(result, path: str | Path, *, filter: str = "proposed", n_tcom:
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
     ax.legend(fontsize=7, loc="upper right")
-    ax.set_title(f"{filter}: mean of {result.runs} runs")
+    kept = [result.runs - r["outliers"] for r in result.rows if r["filter"] == filter]
+    ax.set_title(f"{filter}: mean of the {min(kept) if kept else result.runs} of {result.runs} runs "
+                 "that did not diverge or stray")
     _save(fig, path)
 
 
 def plot_error_curves(result, path: str | Path) -> None:
-    """Fig. 8: run-averaged position error versus mission time, per T_com, both filters."""
+    """Fig. 8: run-averaged position error versus mission time, per T_com, one panel per estimator."""
     plt = _pyplot()
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    filters = _filters_run(result)
+    fig, axes = plt.subplots(len(filters), 1, figsize=(8, 3 * len(filters)), sharex=True, squeeze=False)
+    axes = axes[:, 0]
     travelled = np.cumsum(np.r_[0.0, np.hypot(*np.diff(result.truth_track, axis=0).T)])[-1]
-    for ax, filter in zip(axes, ("proposed", "rosb")):
+    for ax, filter in zip(axes, filters):
         for t in result.tcoms:
             if (t, filter) in result.mean_error_curve:
                 curve = result.mean_error_curve[(t, filter)]

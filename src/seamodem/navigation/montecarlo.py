@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import ConfigError
 from ._kernels import NOISE_COLUMNS, mission_kernel
 from .ekf import ExtendedKalmanFilter
+from .inertial import InertialConfig
 from .models import Auv6Model, closing_speed
 from .smoother import rts_smooth
 from .trajectories import boustrophedon
@@ -44,6 +45,16 @@ __all__ = [
 
 #: Filters of the reproduction: the paper's proposal (range + v_r) and the ROSB baseline (range only).
 FILTERS = ("proposed", "rosb")
+
+#: The inertial filter (:mod:`.inertial`) with range and v_r, with range only, and its two smoothers
+#: (:mod:`.smoothing`, post-processing of the "inertial" mission: the vehicle steers on the filter).
+INERTIAL_FILTERS = ("inertial", "inertial_range", "fixed_lag", "batch")
+
+#: Every estimator :func:`run_monte_carlo` can run, in table order.
+ALL_FILTERS = FILTERS + INERTIAL_FILTERS
+
+#: How the heading-sensor bias evolves in the simulation (:attr:`NoiseModel.heading_bias_model`).
+BIAS_MODELS = ("random_walk", "drift")
 
 #: What the position error is measured on (:attr:`MissionConfig.error_of`).
 ERROR_OF = ("estimate", "smoothed", "last_fix")
@@ -83,6 +94,12 @@ class NoiseModel:
         Gyro white noise [rad/s] (√0.005 = 0.0707, inside the paper's ±0.1 s⁻¹).
     sigma_accel_mps2 : float
         Accelerometer white noise [m/s²] (√0.005, inside the paper's ±0.1 m/s²).
+    heading_bias_model : {"random_walk", "drift"}
+        How ``heading_drift_deg_per_h`` is read. ``"random_walk"`` (the reproduction's choice so far): a
+        random walk whose standard deviation is that value after one hour. ``"drift"``: a bias that drifts
+        at a constant rate, drawn once per run from N(0, (that value per hour)²) — how a datasheet's
+        "bias instability 5°/h" behaves over a mission. The random walk wanders ≈ 0.8° per 100 s, the drift
+        0.14°: docs/navigation.md shows what that difference does to a single-beacon fix.
     """
 
     sigma_range_m: float = math.sqrt(12.0)
@@ -91,9 +108,14 @@ class NoiseModel:
     heading_drift_deg_per_h: float = 5.0
     sigma_omega_rad_s: float = math.sqrt(0.005)
     sigma_accel_mps2: float = math.sqrt(0.005)
+    heading_bias_model: str = "random_walk"
 
     def __post_init__(self):
+        if self.heading_bias_model not in BIAS_MODELS:
+            raise ConfigError("heading_bias_model", f"must be one of {BIAS_MODELS}, got {self.heading_bias_model!r}")
         for name in self.__dataclass_fields__:
+            if name == "heading_bias_model":
+                continue
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ConfigError(name, f"must be finite and >= 0, got {value!r}")
@@ -105,11 +127,36 @@ class NoiseModel:
                 math.radians(self.sigma_heading_deg),
                 self.sigma_omega_rad_s,
                 self.sigma_accel_mps2,
-                math.radians(self.heading_drift_deg_per_h) * math.sqrt(dt_s / 3600.0),
+                math.radians(self.heading_drift_deg_per_h) * math.sqrt(dt_s / 3600.0)
+                if self.heading_bias_model == "random_walk" else 0.0,
                 self.sigma_range_m,
                 self.sigma_vr_mps,
             ]
         )
+
+    def bias_rate(self, noise: np.ndarray) -> float:
+        """The run's heading-bias drift rate [rad/s]: 0 for the random walk, else drawn from ``noise[0, 3]``.
+
+        Row 0 of a mission's normals is not used by the paper's kernel, so the drift takes nothing from the
+        other noise columns: the same runs see the same IMU, range and v_r noise under both bias models.
+        """
+        if self.heading_bias_model == "random_walk":
+            return 0.0
+        return math.radians(self.heading_drift_deg_per_h) / 3600.0 * float(noise[0, 3])
+
+    def inertial_config(self, dt_s: float, **overrides) -> InertialConfig:
+        """The inertial filter told the truth about these sensors (densities at the step ``dt_s``).
+
+        Random-walk bias: the bias random walk is the stated one. Drifting bias: the drift rate is a state
+        with that prior and the bias keeps a small random walk (0.5°/h after one hour) for what a constant
+        rate does not describe.
+        """
+        if self.heading_bias_model == "drift":
+            extra = dict(bias_rw=math.radians(0.5) / 60.0, estimate_bias_drift=True,
+                         p0_bias_drift_rad_s=max(math.radians(self.heading_drift_deg_per_h), 1e-9) / 3600.0)
+        else:
+            extra = dict(bias_rw=math.radians(self.heading_drift_deg_per_h) / 60.0)
+        return InertialConfig.from_noise_model(self, dt_s, **{**extra, **overrides})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -152,6 +199,20 @@ class MissionConfig:
         docs/navigation.md).
     path : dict
         Keyword arguments of :func:`~seamodem.navigation.trajectories.boustrophedon`.
+    inertial : InertialConfig, optional
+        The inertial filter's settings; ``None``: :meth:`NoiseModel.inertial_config` (told the truth).
+    start_error : bool
+        Start the inertial filter off the truth by a draw from its initial covariance (position, speed)
+        and start the true heading bias from its prior: what a consistency check needs. ``False`` (the
+        paper's protocol): the filter starts at the true position and speed, the bias at 0.
+    lag_s : float
+        Latency of the fixed-lag smoother [s].
+    divergence_m : float
+        A run whose position error ever exceeds this [m] (or is not finite) counts as diverged.
+    current_mps : tuple
+        True water current (east, north) [m/s]; only the inertial filters' missions simulate it.
+    range_scale : float
+        True scale error of range and v_r (a sound-speed error c_true/c_assumed − 1); inertial missions only.
     """
 
     tcom_s: float = 3.0
@@ -168,8 +229,22 @@ class MissionConfig:
     noise: NoiseModel = field(default_factory=NoiseModel)
     error_of: str = "estimate"
     path: dict = field(default_factory=dict)
+    inertial: InertialConfig | None = None
+    start_error: bool = False
+    lag_s: float = 10.0
+    divergence_m: float = 50.0
+    current_mps: tuple = (0.0, 0.0)
+    range_scale: float = 0.0
 
     def __post_init__(self):
+        if not (math.isfinite(self.lag_s) and self.lag_s > 0):
+            raise ConfigError("lag_s", f"must be > 0 s, got {self.lag_s!r}")
+        if not self.divergence_m > 0:
+            raise ConfigError("divergence_m", f"must be > 0 m, got {self.divergence_m!r}")
+        if len(self.current_mps) != 2 or not all(math.isfinite(c) for c in self.current_mps):
+            raise ConfigError("current_mps", f"must be two finite speeds [m/s], got {self.current_mps!r}")
+        if not (math.isfinite(self.range_scale) and abs(self.range_scale) < 0.1):
+            raise ConfigError("range_scale", f"must be finite and within ±0.1, got {self.range_scale!r}")
         if not self.dt_s > 0:
             raise ConfigError("dt_s", f"must be > 0 s, got {self.dt_s!r}")
         ratio = self.tcom_s / self.dt_s
@@ -197,6 +272,11 @@ class MissionConfig:
         if self.q is None:
             return np.full(6, self.dt_s**8)
         return np.broadcast_to(np.asarray(self.q, dtype=float), (6,)).copy()
+
+    @property
+    def inertial_config(self) -> InertialConfig:
+        """The inertial filter's settings (:attr:`inertial`, or told the truth about the sensors)."""
+        return self.inertial if self.inertial is not None else self.noise.inertial_config(self.dt_s)
 
     @property
     def com_every(self) -> int:
@@ -227,8 +307,12 @@ def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = 
     ``estimate`` is the position ``config.error_of`` names: the filter's, the
     smoothed one, or the last frame's held until the next.
     """
+    if filter in INERTIAL_FILTERS:
+        return simulate_inertial_mission(config, noise, filter=filter, reference=reference)[:3]
     if filter not in FILTERS:
-        raise ConfigError("filter", f"must be one of {FILTERS}, got {filter!r}")
+        raise ConfigError("filter", f"must be one of {ALL_FILTERS}, got {filter!r}")
+    if config.current_mps != (0.0, 0.0) or config.range_scale != 0.0:
+        raise ConfigError("current_mps", "a current or a range scale is simulated for the inertial filters only")
     if reference is None:
         reference, _ = config.reference()
     n = reference.shape[0] - 1
@@ -251,6 +335,7 @@ def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = 
         config.omega_max_rad_s,
         config.accel_max_mps2,
         history,
+        config.noise.bias_rate(noise),
     )
     if config.error_of == "estimate":
         return error, estimate, truth
@@ -261,6 +346,67 @@ def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = 
     else:
         estimate = estimate[held_fix_index(n, config.com_every)]
     return np.hypot(*(estimate - truth).T), estimate, truth
+
+
+def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = "inertial",
+                              reference=None):
+    """One mission with the inertial filter in the loop: (error, estimate, truth, details) [m].
+
+    ``filter``: ``"inertial"`` (range + v_r), ``"inertial_range"`` (range only), or a smoother of the
+    ``"inertial"`` mission, ``"fixed_lag"`` (latency ``config.lag_s``) or ``"batch"``. The controller steers
+    on the filter (or the truth); a smoother post-processes the sensors that mission recorded, through the
+    same filter re-run over them (equal to the in-loop filter: tested). ``details`` has the filter's
+    ``status`` and ``nis`` per step, the recorded ``sensors`` (n + 1, 5) and, for smoothers, the
+    ``states`` and ``covariances`` of the output.
+    """
+    from ._inertial_mission import inertial_mission_kernel
+
+    if filter not in INERTIAL_FILTERS:
+        raise ConfigError("filter", f"must be one of {INERTIAL_FILTERS}, got {filter!r}")
+    if config.error_of != "estimate":
+        raise ConfigError("error_of", "the inertial filters have their own smoothers (filter 'fixed_lag' or "
+                                      f"'batch'); error_of must be 'estimate', got {config.error_of!r}")
+    if reference is None:
+        reference, _ = config.reference()
+    n = reference.shape[0] - 1
+    icfg = config.inertial_config
+    start = _start_state(reference)
+    use_vr = filter != "inertial_range"
+    z0, P0 = icfg.initial(start[0], start[1], 0.0, start[3])
+    offsets = np.zeros(4)
+    if config.start_error:
+        # row 0's columns 1, 2, 4, 5 are used by no kernel (0: the first heading reading, 3: the bias drift)
+        offsets[:] = (icfg.p0_position_m * noise[0, 1], icfg.p0_position_m * noise[0, 2],
+                      icfg.p0_speed_mps * noise[0, 4], icfg.p0_bias_rad * noise[0, 5])
+    sig = config.noise.sigmas(config.dt_s)
+    meas_var = np.array([max(config.noise.sigma_range_m, 1e-6) ** 2, max(config.noise.sigma_vr_mps, 1e-6) ** 2])
+    sensors = np.empty((n + 1, 5))
+    gate = icfg.gate[1 if use_vr else 0]
+    error, estimate, truth, status, nis = inertial_mission_kernel(
+        reference, noise, start, offsets, sig, np.asarray(config.beacon_xy, dtype=float), config.dt_s,
+        config.com_every, use_vr, config.steer_on_estimate, config.v_min_mps, config.v_max_mps,
+        config.omega_max_rad_s, config.accel_max_mps2, np.asarray(config.current_mps, dtype=float),
+        config.range_scale, config.noise.bias_rate(noise), z0, P0, icfg.layout, icfg.process_density,
+        icfg.heading_sigma_rad**2, meas_var, gate, icfg.gate_reset_after, icfg.iterations, icfg.second_order,
+        sensors)
+    details = {"status": status, "nis": nis, "sensors": sensors}
+    if filter in ("inertial", "inertial_range"):
+        return error, estimate, truth, details
+    from .inertial import build_nodes, run_filter
+    from .smoothing import batch_smooth, fixed_lag_smooth
+
+    t = np.arange(n + 1) * config.dt_s
+    frames = np.isfinite(sensors[:, 3])
+    nodes = build_nodes(t, sensors[:, 0], sensors[:, 1], sensors[:, 2], t[frames], sensors[frames, 3],
+                        sensors[frames, 4], meas_var[0], meas_var[1], heading_var=icfg.heading_sigma_rad**2)
+    z_start = z0.copy()
+    z_start[[0, 1, 3]] += offsets[:3]
+    z_start[2] = sensors[0, 0] - z_start[4]
+    run = run_filter(nodes, icfg, beacon_xy=config.beacon_xy, z0=z_start, P0=P0, use_vr=True)
+    out = batch_smooth(run) if filter == "batch" else fixed_lag_smooth(run, lag_s=config.lag_s)
+    estimate = np.ascontiguousarray(out.states[:, :2])
+    details.update(states=out.states, covariances=out.covariances, filter_run=run)
+    return np.hypot(*(estimate - truth).T), estimate, truth, details
 
 
 def held_fix_index(n_steps: int, com_every: int) -> np.ndarray:
@@ -334,21 +480,33 @@ def outlier_mask(values: np.ndarray) -> np.ndarray:
 
 
 def summarize_runs(mean_error: np.ndarray, var_error: np.ndarray, max_error: np.ndarray,
-                   travelled: np.ndarray) -> dict:
+                   travelled: np.ndarray, *, divergence_m: float = 50.0) -> dict:
     """One row of Table 3 from per-run statistics; outliers counted then excluded.
 
     ``mean_error``, ``var_error``, ``max_error`` are each run's mean, variance and
     maximum of the position error over time [m, m², m]; ``travelled`` each run's
-    travelled distance [m]. %etd = error / travelled distance × 100.
+    travelled distance [m]. %etd = error / travelled distance × 100. ``diverged``
+    counts the runs whose error ever exceeded ``divergence_m`` (or was not finite);
+    they are among the outliers when the IQR rule catches them, and a row with any
+    is not a result (:func:`format_table` says so).
     """
-    out = outlier_mask(mean_error)
+    diverged = ~np.isfinite(max_error) | (max_error > divergence_m)
+    finite = np.isfinite(mean_error)
+    out = ~finite
+    out[finite] = outlier_mask(mean_error[finite])
     keep = ~out
+    if not keep.any():
+        nan = float("nan")
+        return {"mean_error_m": nan, "error_variance_m2": nan, "etd_max_pct": nan, "etd_mean_pct": nan,
+                "outliers": int(out.sum()), "diverged": int(diverged.sum()), "median_error_m": nan}
     return {
         "mean_error_m": float(mean_error[keep].mean()),
         "error_variance_m2": float(var_error[keep].mean()),
         "etd_max_pct": float((100 * max_error[keep] / travelled[keep]).mean()),
         "etd_mean_pct": float((100 * mean_error[keep] / travelled[keep]).mean()),
         "outliers": int(out.sum()),
+        "diverged": int(diverged.sum()),
+        "median_error_m": float(np.median(mean_error[finite])) if finite.any() else float("nan"),
     }
 
 
@@ -449,8 +607,8 @@ def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs:
     if runs < 4:
         raise ConfigError("runs", f"must be >= 4 (quartiles for the outlier rule), got {runs!r}")
     for f in filters:
-        if f not in FILTERS:
-            raise ConfigError("filter", f"must be one of {FILTERS}, got {f!r}")
+        if f not in ALL_FILTERS:
+            raise ConfigError("filter", f"must be one of {ALL_FILTERS}, got {f!r}")
     configs = {float(t): replace(config, tcom_s=float(t)) for t in tcoms}
     reference, _ = config.reference()
     workers = workers or os.cpu_count() or 1
@@ -466,12 +624,14 @@ def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs:
     rows, curves_out, tracks_out, per_run = [], {}, {}, {}
     for (t, f), pieces in parts.items():
         stats = np.vstack([p[0] for p in pieces])
-        keep = ~outlier_mask(stats[:, 0])
+        finite = np.isfinite(stats[:, 0]) & np.isfinite(stats[:, 2])
+        keep = finite & (stats[:, 2] <= config.divergence_m)
+        keep[finite] &= ~outlier_mask(stats[finite, 0])
         curves_out[(t, f)] = np.vstack([p[1] for p in pieces])[keep].mean(axis=0)
         tracks_out[(t, f)] = np.concatenate([p[2] for p in pieces])[keep].mean(axis=0)
         per_run[(t, f)] = stats[:, 0]
-        rows.append({"tcom_s": t, "filter": f, **summarize_runs(*stats.T)})
-    rows.sort(key=lambda r: (r["tcom_s"], FILTERS.index(r["filter"])))
+        rows.append({"tcom_s": t, "filter": f, **summarize_runs(*stats.T, divergence_m=config.divergence_m)})
+    rows.sort(key=lambda r: (r["tcom_s"], ALL_FILTERS.index(r["filter"])))
     n = reference.shape[0] - 1
     return MonteCarloResult(config, tuple(configs), runs, seed, rows, np.arange(n + 1) * config.dt_s, truth,
                             curves_out, tracks_out, per_run, wall)
@@ -485,46 +645,66 @@ def _q_text(config: MissionConfig) -> str:
 
 
 def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
-    """Tables 3 and 4 in the paper's layout, with the paper's values beside ours when ``paper``."""
+    """The result as text: paper 000's Tables 3 and 4 (with the paper's values when ``paper``) for its
+    filters, and one table of every estimator that ran, with outlier and divergence counts.
+
+    A row with diverged runs is not a result: its figure is replaced by ``UNSTABLE`` and the count.
+    """
     by = {(r["tcom_s"], r["filter"]): r for r in result.rows}
+    ran = [f for f in ALL_FILTERS if any((t, f) in by for t in result.tcoms)]
     noise = result.config.noise
     lines = [
         f"Monte Carlo, {result.runs} runs per row, seed {result.seed}, dt = {result.config.dt_s} s, "
         f"controller steers on the {'estimate' if result.config.steer_on_estimate else 'truth'}",
         f"noise: range {noise.sigma_range_m:.3g} m, v_r {noise.sigma_vr_mps:.3g} m/s, heading "
-        f"{noise.sigma_heading_deg:.3g} deg + {noise.heading_drift_deg_per_h:.3g} deg/h random walk, gyro "
-        f"{noise.sigma_omega_rad_s:.3g} rad/s, accel {noise.sigma_accel_mps2:.3g} m/s^2; "
-        f"filter R = {result.config.r_diag} (d, v_r, psi, omega, a), Q = {_q_text(result.config)}; "
-        f"error of the {result.config.error_of.replace('_', ' ')}",
-        "",
-        "Table 3 (proposed filter)",
-        f"{'T_com':>6} | {'mean error (outliers) m':>24} | {'variance m2':>11} | {'%etd max':>8} | {'%etd mean':>9}"
-        + (f" || {'paper mean (out)':>17} | {'paper var':>9} | {'max':>6} | {'mean':>6} | {'ratio':>5}" if paper else ""),
+        f"{noise.sigma_heading_deg:.3g} deg + bias {noise.heading_drift_deg_per_h:.3g} deg/h "
+        f"({noise.heading_bias_model.replace('_', ' ')}), gyro {noise.sigma_omega_rad_s:.3g} rad/s, accel "
+        f"{noise.sigma_accel_mps2:.3g} m/s^2",
     ]
-    for t in result.tcoms:
-        r = by.get((t, "proposed"))
+    if any(f in FILTERS for f in ran):
+        lines.append(f"paper filters: R = {result.config.r_diag} (d, v_r, psi, omega, a), "
+                     f"Q = {_q_text(result.config)}; error of the {result.config.error_of.replace('_', ' ')}")
+    if any(f in INERTIAL_FILTERS for f in ran):
+        ic = result.config.inertial_config
+        lines.append(f"inertial filter: sensor densities told the truth, bias drift state "
+                     f"{'on' if ic.estimate_bias_drift else 'off'}, gate {ic.gate_probability}; fixed lag "
+                     f"{result.config.lag_s:g} s")
+    lines.append(f"diverged = runs whose error exceeded {result.config.divergence_m:g} m; outliers (IQR rule) "
+                 "are counted, then excluded from the mean")
+
+    def cell(r):
         if r is None:
-            continue
-        line = (f"{t:>5g}s | {r['mean_error_m']:>18.4f} ({r['outliers']:>3}) | {r['error_variance_m2']:>11.4f} | "
-                f"{r['etd_max_pct']:>8.4f} | {r['etd_mean_pct']:>9.4f}")
-        if paper and t in PAPER_TABLE:
-            p = PAPER_TABLE[t]
-            line += (f" || {p[0]:>11.4f} ({p[1]:>3}) | {p[2]:>9.4f} | {p[3]:>6.4f} | {p[4]:>6.4f} | "
-                     f"{r['mean_error_m'] / p[0]:>5.2f}")
-        lines.append(line)
-    lines += ["", "Table 4 (proposed vs ROSB)",
-              f"{'T_com':>6} | {'proposed m (out)':>17} | {'ROSB m (out)':>17}"
-              + (f" || {'paper proposed':>15} | {'paper ROSB':>15} | {'ratio ROSB':>10}" if paper else "")]
+            return f"{'':>22}"
+        if r["diverged"]:
+            return f"{'UNSTABLE':>10} {r['diverged']:>3}/{result.runs:<3} div"
+        return f"{r['mean_error_m']:>10.3f} ({r['outliers']:>3}, {r['diverged']:>2})"
+
+    if "proposed" in ran and paper:
+        lines += ["", "Table 3 (paper 000's proposed filter)",
+                  f"{'T_com':>6} | {'mean error m (outliers, diverged)':>33} | {'variance m2':>11} | {'%etd max':>8} | "
+                  f"{'%etd mean':>9} || {'paper mean (out)':>17} | {'paper var':>9} | {'ratio':>5}"]
+        for t in result.tcoms:
+            r = by.get((t, "proposed"))
+            if r is None:
+                continue
+            line = (f"{t:>5g}s | {cell(r):>33} | {r['error_variance_m2']:>11.4f} | "
+                    f"{r['etd_max_pct']:>8.4f} | {r['etd_mean_pct']:>9.4f}")
+            if t in PAPER_TABLE:
+                p = PAPER_TABLE[t]
+                ratio = "  -  " if r["diverged"] else f"{r['mean_error_m'] / p[0]:>5.2f}"
+                line += f" || {p[0]:>11.4f} ({p[1]:>3}) | {p[2]:>9.4f} | {ratio}"
+            lines.append(line)
+    lines += ["", "Mean position error [m] (outliers, diverged) per estimator"
+              + (" | paper proposed / ROSB" if paper else ""),
+              f"{'T_com':>6} | " + " | ".join(f"{f:>22}" for f in ran) + (" | paper" if paper else "")]
     for t in result.tcoms:
-        a, b = by.get((t, "proposed")), by.get((t, "rosb"))
-        if a is None or b is None:
-            continue
-        line = (f"{t:>5g}s | {a['mean_error_m']:>11.4f} ({a['outliers']:>3}) | "
-                f"{b['mean_error_m']:>11.4f} ({b['outliers']:>3})")
+        line = f"{t:>5g}s | " + " | ".join(cell(by.get((t, f))) for f in ran)
         if paper and t in PAPER_TABLE:
-            p = PAPER_TABLE[t]
-            line += (f" || {p[0]:>9.4f} ({p[1]:>2}) | {p[5]:>9.4f} ({p[6]:>2}) | "
-                     f"{b['mean_error_m'] / p[5]:>10.2f}")
+            line += f" | {PAPER_TABLE[t][0]:.2f} / {PAPER_TABLE[t][5]:.2f}"
         lines.append(line)
+    unstable = sum(r["diverged"] for r in result.rows)
+    if unstable:
+        lines += ["", f"{unstable} run(s) diverged in the rows marked UNSTABLE: those rows are not results "
+                      "(docs/navigation.md, 'Stable defaults')."]
     lines.append(f"wall time {result.wall_time_s:.1f} s")
     return "\n".join(lines)

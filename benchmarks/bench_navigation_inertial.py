@@ -1,0 +1,149 @@
+"""The inertial filter and its smoothers against paper 000's filters, the paper's Table 3, and χ² bands.
+
+    python benchmarks/bench_navigation_inertial.py [--runs 300] [--only protocol|consistency|speed]
+
+- protocol: paper 000's Monte Carlo (boustrophedon, T_com 3–20 s, the paper's IMU), controller steering on
+  the estimate, mean position error per T_com for the paper's EKF and ROSB, the inertial filter (range + v_r
+  and range only), the fixed-lag and the batch smoother, at paper-grade noise (σ_d 3.46 m, σ_vr 0.447 m/s)
+  and receiver-grade noise (σ_d 1 cm, σ_vr 2 cm/s), under both heading-bias models; diverged runs counted.
+- consistency: NEES of the position (2 dof) and NIS of the acoustic updates (2 dof) of the inertial filter and
+  the batch smoother, σ_d ∈ {1 mm, 1 cm, 10 cm, 1 m, 5 m}, filter told the truth and started from a draw of
+  its own prior; the 99 % band of the run-averaged statistic and the share of time steps inside it.
+- speed: batch smoother on a 26-minute mission (6200 steps), the full Monte Carlo with the inertial filter.
+
+Figures are medians of runs on this (shared, 2-core) machine; tables go to benchmarks/results/.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from seamodem.navigation.montecarlo import (
+    PAPER_TABLE,
+    MissionConfig,
+    NoiseModel,
+    mission_noise,
+    run_monte_carlo,
+    simulate_inertial_mission,
+)
+
+TCOMS = (3.0, 6.0, 9.0, 12.0, 15.0, 20.0)
+ORDER = ("proposed", "rosb", "inertial", "inertial_range", "fixed_lag", "batch")
+NOISES = {"paper-grade (3.46 m, 0.447 m/s)": (12.0**0.5, 0.2**0.5), "receiver (0.01 m, 0.02 m/s)": (0.01, 0.02)}
+# χ² 99 % two-sided bands of the mean of R independent χ²(2) values, R = 40: chi2.ppf([.005, .995], 80) / 40
+NEES_RUNS = 40
+BAND = (53.540 / NEES_RUNS * 1.0, 112.329 / NEES_RUNS * 1.0)
+
+
+def protocol(runs: int, out: list) -> None:
+    out.append(f"## Paper protocol: {runs} runs per cell, seed 0, controller steering on the estimate")
+    for bias_model in ("random_walk", "drift"):
+        for label, (sd, sv) in NOISES.items():
+            noise = NoiseModel(sigma_range_m=sd, sigma_vr_mps=sv, heading_bias_model=bias_model)
+            config = MissionConfig(noise=noise)
+            t0 = time.perf_counter()
+            res = run_monte_carlo(config, tcoms=TCOMS, runs=runs, seed=0, filters=ORDER)
+            by = {(r["tcom_s"], r["filter"]): r for r in res.rows}
+            out.append(f"\n### {label}, heading bias {bias_model.replace('_', ' ')} 5 deg/h "
+                       f"(wall {time.perf_counter() - t0:.0f} s)")
+            out.append("mean error m (outliers, diverged); UNSTABLE = runs diverged (error > 50 m): not a result")
+            out.append(f"{'T_com':>6} | " + " | ".join(f"{f:>22}" for f in ORDER) + " | paper proposed / ROSB | "
+                       "inertial / paper")
+            for t in TCOMS:
+                cells = []
+                for f in ORDER:
+                    r = by[(t, f)]
+                    cells.append(f"{'UNSTABLE':>10} {r['diverged']:>3} div     " if r["diverged"] else
+                                 f"{r['mean_error_m']:>10.3f} ({r['outliers']:>3}, {r['diverged']:>2})")
+                p = PAPER_TABLE[t]
+                out.append(f"{t:>5g}s | " + " | ".join(cells) + f" | {p[0]:>8.2f} / {p[5]:>5.2f}      | "
+                           f"{by[(t, 'inertial')]['mean_error_m'] / p[0]:>6.2f}")
+            print("\n".join(out[-(len(TCOMS) + 3):]), flush=True)
+
+
+def consistency(out: list) -> None:
+    out.append(f"\n## Consistency: {NEES_RUNS} runs per row, T_com 3 s, steering on the truth, filter told the "
+               "truth and started from a draw of its prior; 99 % band of the run-averaged NEES/NIS (2 dof): "
+               f"[{BAND[0]:.2f}, {BAND[1]:.2f}]")
+    out.append(f"{'sigma_d':>8} | {'filter ANEES':>12} | {'in band':>7} | {'NIS mean':>8} | {'gated':>5} | "
+               f"{'batch ANEES':>11} | {'in band':>7} | {'filter err m':>12} | {'batch err m':>11}")
+    for sd in (0.001, 0.01, 0.1, 1.0, 5.0):
+        sv = max(0.02, 0.1 * sd)
+        noise = NoiseModel(sigma_range_m=sd, sigma_vr_mps=sv, heading_bias_model="random_walk")
+        config = MissionConfig(noise=noise, steer_on_estimate=False, start_error=True)
+        ref, _ = config.reference()
+        n = ref.shape[0] - 1
+        nees_f, nees_b, nis, gated, ef, eb = [], [], [], 0, [], []
+        for run in range(NEES_RUNS):
+            noise_arr = mission_noise(0, run, n)
+            err, est, truth, det = simulate_inertial_mission(config, noise_arr, filter="batch", reference=ref)
+            fr = det["filter_run"]
+            for states, covs, acc in ((fr.states, fr.covariances, nees_f), (det["states"], det["covariances"], nees_b)):
+                e = states[:, :2] - truth
+                acc.append(np.einsum("ki,kij,kj->k", e, np.linalg.inv(covs[:, :2, :2]), e))
+            used = fr.status == 1
+            nis.append(fr.nis[used])
+            gated += int((fr.status == 2).sum())
+            ef.append(np.hypot(*(fr.states[:, :2] - truth).T).mean())
+            eb.append(err.mean())
+        af, ab = np.mean(nees_f, axis=0), np.mean(nees_b, axis=0)
+        inf = np.mean((af >= BAND[0]) & (af <= BAND[1]))
+        inb = np.mean((ab >= BAND[0]) & (ab <= BAND[1]))
+        out.append(f"{sd:>7g}m | {af.mean():>12.2f} | {inf:>6.0%} | {np.mean(np.concatenate(nis)):>8.2f} | "
+                   f"{gated:>5} | {ab.mean():>11.2f} | {inb:>6.0%} | {np.mean(ef):>12.3f} | {np.mean(eb):>11.3f}")
+        print(out[-1], flush=True)
+
+
+def speed(out: list) -> None:
+    from seamodem.navigation.smoothing import batch_smooth, fixed_lag_smooth
+
+    noise = NoiseModel(sigma_range_m=0.01, sigma_vr_mps=0.02)
+    config = MissionConfig(noise=noise, steer_on_estimate=False)
+    ref, _ = config.reference()
+    n = ref.shape[0] - 1
+    _, _, _, det = simulate_inertial_mission(config, mission_noise(0, 0, n), filter="batch", reference=ref)
+    run = det["filter_run"]
+    tb, tl = [], []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        batch_smooth(run)
+        tb.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        fixed_lag_smooth(run, lag_s=10.0)
+        tl.append(time.perf_counter() - t0)
+    out.append(f"\n## Speed ({n + 1} steps, {len(run.nodes)} nodes)")
+    out.append(f"batch smoother: median {np.median(tb):.3f} s (goal <= 2 s, ratio {np.median(tb) / 2:.2f}); "
+               f"fixed-lag 10 s: median {np.median(tl):.3f} s")
+    t0 = time.perf_counter()
+    run_monte_carlo(replace(config, steer_on_estimate=True), tcoms=TCOMS, runs=300, seed=0, filters=("inertial",))
+    wall = time.perf_counter() - t0
+    out.append(f"full Monte Carlo, inertial filter, 6 T_com x 300 runs, steering on the estimate: {wall:.1f} s "
+               f"(goal <= 60 s, ratio {wall / 60:.2f})")
+    print("\n".join(out[-3:]), flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=300)
+    parser.add_argument("--only", choices=("protocol", "consistency", "speed"))
+    args = parser.parse_args()
+    out = ["# bench_navigation_inertial"]
+    if args.only in (None, "speed"):
+        speed(out)
+    if args.only in (None, "consistency"):
+        consistency(out)
+    if args.only in (None, "protocol"):
+        protocol(args.runs, out)
+    results = Path(__file__).parent / "results"
+    results.mkdir(exist_ok=True)
+    name = "bench_navigation_inertial" + (f"_{args.only}" if args.only else "") + ".txt"
+    (results / name).write_text("\n".join(out) + "\n", encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
