@@ -64,17 +64,7 @@ def test_track_geodetic_adds_lat_lon(scenario):
         assert "lat_deg" in next(csv.reader(f))
 
 
-@pytest.mark.parametrize(
-    "defect, message",
-    [
-        ("missing_column", "missing column(s) v_r_mps"),
-        ("unsorted", "t_arrival_s not sorted"),
-        ("duplicate", "duplicate time t_arrival_s"),
-        ("nan", "column range_m has 1 NaN"),
-    ],
-)
-def test_bad_measurement_files_fail_in_one_line(scenario, capsys, defect, message):
-    d, header, rows = scenario
+def _defective(d, header, rows, defect):
     rows = [list(r) for r in rows]
     if defect == "missing_column":
         i = header.index("v_r_mps")
@@ -87,11 +77,36 @@ def test_bad_measurement_files_fail_in_one_line(scenario, capsys, defect, messag
     else:
         rows[5][4] = "nan"
     write_csv(d / "bad.csv", header, rows)
+
+
+def test_missing_column_fails_in_one_line(scenario, capsys):
+    d, header, rows = scenario
+    _defective(d, header, rows, "missing_column")
     code = main(["nav", "track", str(d / "bad.csv"), "--imu", str(d / "imu.csv"), "--beacon", "50,30",
                  "--start", "0,0", "-o", str(d / "out.csv")])
     err = capsys.readouterr().err.strip()
-    assert code == 2 and message in err and len(err.splitlines()) == 1
+    assert code == 2 and "missing column(s) v_r_mps" in err and len(err.splitlines()) == 1
     assert not (d / "out.csv").exists() and not (d / "out.png").exists()
+
+
+@pytest.mark.parametrize(
+    "defect, message",
+    [
+        ("unsorted", "t_arrival_s not in time order; sorted"),
+        ("duplicate", "dropped 1 row(s) with a duplicate t_arrival_s"),
+        ("nan", "skipped 1 of 39 row(s) with NaN or empty values (in range_m 1)"),
+    ],
+)
+def test_repairable_measurement_files_warn_in_one_line(scenario, capsys, defect, message):
+    """What navigation.logs repairs is one warning line on stderr, and the track is written."""
+    d, header, rows = scenario
+    _defective(d, header, rows, defect)
+    code = main(["nav", "track", str(d / "bad.csv"), "--imu", str(d / "imu.csv"), "--beacon", "50,30",
+                 "--start", "0,0", "--start-speed", "1", "-o", str(d / "out.csv")])
+    err = capsys.readouterr().err.strip()
+    assert code == 0 and len(err.splitlines()) == 1
+    assert err.startswith("seamodem nav track: warning: measurement file") and message in err
+    assert (d / "out.csv").exists() and (d / "out_frames.csv").exists()
 
 
 def test_missing_beacon_or_bad_beacon(scenario, capsys):
@@ -122,9 +137,11 @@ def test_simulate_writes_table_csv(tmp_path, capsys, monkeypatch):
 
 
 def test_track_smooth_improves_and_keeps_last_state(scenario):
+    """Paper filter: the RTS smoother's last state is the filter's own."""
     d, _, _ = scenario
     common = ["nav", "track", str(d / "meas.csv"), "--imu", str(d / "imu.csv"), "--beacon", "50,30",
-              "--start", "0,0", "--start-speed", "1", "--truth", str(d / "truth.csv"), "--r-from-records"]
+              "--start", "0,0", "--start-speed", "1", "--truth", str(d / "truth.csv"), "--r-from-records",
+              "--filter", "proposed"]
     assert main(common + ["-o", str(d / "f.csv")]) == 0
     assert main(common + ["--smooth", "-o", str(d / "s.csv")]) == 0
     f, s = (json.loads((d / name).read_text()) for name in ("f.json", "s.json"))

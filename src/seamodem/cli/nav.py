@@ -124,8 +124,9 @@ def add_parser(sub) -> None:
                    help="σ of every v_r [m/s], overriding the records' (default: each record's σ, or 0.05)")
     t.add_argument("--range-floor", type=float, default=0.01, metavar="M",
                    help="floor of the records' range σ [m] (default 0.01: clock sync, sound speed; see docs)")
-    t.add_argument("--vr-floor", type=float, default=0.01, metavar="MPS",
-                   help="floor of the records' v_r σ [m/s] (default 0.01)")
+    t.add_argument("--vr-floor", type=float, default=0.05, metavar="MPS",
+                   help="floor of the records' v_r σ [m/s] (default 0.05: multipath Doppler spread, motion "
+                        "during the frame; see docs)")
     t.add_argument("--r-from-records", action="store_true",
                    help="paper filters: R from each record's σ instead of eq 25 (the inertial filters do it by "
                         "default; accepted and ignored for them)")
