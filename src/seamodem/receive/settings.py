@@ -138,9 +138,9 @@ class Emissions:
         slack = 1e-6  # a frame heard at tof ≈ 0 may measure a hair early
         if self.times_s is None:
             k = math.floor((t_s - self.start_s + slack) / self.period_s)
-            return (k, self.start_s + k * self.period_s) if k >= 0 else (-1, math.nan)
-        k = int(np.searchsorted(self.times_s, t_s + slack, side="right")) - 1
-        return (k, float(self.times_s[k])) if k >= 0 else (-1, math.nan)
+        else:
+            k = int(np.searchsorted(self.times_s, t_s + slack, side="right")) - 1
+        return (k, self.time_of(k)) if k >= 0 else (-1, math.nan)
 
     def time_of(self, frame_index: int) -> float:
         """Emission time of frame ``frame_index`` [s] (nan for −1, no emission)."""
