@@ -454,7 +454,15 @@ def _update_acoustic(z, P, lay, beacon, meas, var, use_range, use_vr, gate, iter
             zi[i] = new
         if step < 1e-10:
             break
-    # covariance with the last linearization: P − PHᵀ S⁻¹ H P
+    if iterations == 1:
+        # the plain EKF: covariance with the prior's linearization (PHᵀ and S above)
+        if rows > 1:
+            det = s00 * s11 - s01 * s01
+            i00, i01, i11 = s11 / det, -s01 / det, s00 / det
+        else:
+            i00, i01, i11 = 1.0 / s00, 0.0, 0.0
+        return _finish_update(z, P, zi, PHt0, PHt1, i00, i01, i11, nis)
+    # iterated: covariance with the last linearization, P − PHᵀ S⁻¹ H P
     rows = _acoustic_model(zi, lay, beacon, use_range, use_vr, h, Hw)
     for i in range(n):
         a0 = 0.0
@@ -479,6 +487,13 @@ def _update_acoustic(z, P, lay, beacon, meas, var, use_range, use_vr, gate, iter
         i00, i01, i11 = s11 / det, -s01 / det, s00 / det
     else:
         i00, i01, i11 = 1.0 / s00, 0.0, 0.0
+    return _finish_update(z, P, zi, PHt0, PHt1, i00, i01, i11, nis)
+
+
+@njit(cache=True, nogil=True)
+def _finish_update(z, P, zi, PHt0, PHt1, i00, i01, i11, nis):
+    """z ← zi, P ← P − PHᵀ S⁻¹ H P (S⁻¹ given by its three entries), symmetrized."""
+    n = z.shape[0]
     for i in range(n):
         for j in range(n):
             P[i, j] -= (PHt0[i] * (i00 * PHt0[j] + i01 * PHt1[j]) + PHt1[i] * (i01 * PHt0[j] + i11 * PHt1[j]))
