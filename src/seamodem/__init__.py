@@ -20,6 +20,7 @@ Examples
 
 from ._lazy import exports, lazy_module
 from ._version import __version__
+from .transmit import __all__ as _transmit_all  # a lazy facade itself: cheap
 
 _EXPORTS = exports(
     {
@@ -37,35 +38,7 @@ _EXPORTS = exports(
             "sound_speed_mackenzie",
             "thorp_absorption_db_per_km",
         ),
-        "transmit": (
-            "BeaconSchedule",
-            "BeaconSignal",
-            "payloads_from_bytes",
-            "payloads_from_text",
-            "rebuild_from_sidecar",
-            "render_beacon",
-            "write_beacon",
-            "conv_encode",
-            "crc16_ccitt",
-            "encode_payload",
-            "parse_info_block",
-            "code_order_llr",
-            "Frame",
-            "build_frame",
-            "frame_baseband",
-            "frame_sample_count",
-            "frame_symbol_times",
-            "frame_waveform",
-            "bits_to_symbols",
-            "constellation",
-            "symbols_to_bits",
-            "autocorrelation_sidelobes",
-            "pilot_bits",
-            "pilot_symbols",
-            "srrc_matrix",
-            "srrc_pulse",
-            "srrc_taps",
-        ),
+        "transmit": _transmit_all,
         "receive": (
             "Emissions",
             "MeasurementRecord",
