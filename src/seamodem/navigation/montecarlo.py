@@ -631,8 +631,10 @@ def run_monte_carlo(config: MissionConfig, *, tcoms=(3, 6, 9, 12, 15, 20), runs:
         finite = np.isfinite(stats[:, 0]) & np.isfinite(stats[:, 2])
         keep = finite & (stats[:, 2] <= config.divergence_m)
         keep[finite] &= ~outlier_mask(stats[finite, 0])
-        curves_out[(t, f)] = np.vstack([p[1] for p in pieces])[keep].mean(axis=0)
-        tracks_out[(t, f)] = np.concatenate([p[2] for p in pieces])[keep].mean(axis=0)
+        curves, tracks = np.vstack([p[1] for p in pieces]), np.concatenate([p[2] for p in pieces])
+        # every run diverged or strayed: no mean to draw (NaN, and the table says UNSTABLE)
+        curves_out[(t, f)] = curves[keep].mean(axis=0) if keep.any() else np.full(curves.shape[1], np.nan)
+        tracks_out[(t, f)] = tracks[keep].mean(axis=0) if keep.any() else np.full(tracks.shape[1:], np.nan)
         per_run[(t, f)] = stats[:, 0]
         rows.append({"tcom_s": t, "filter": f, **summarize_runs(*stats.T, divergence_m=config.divergence_m)})
     rows.sort(key=lambda r: (r["tcom_s"], ALL_FILTERS.index(r["filter"])))
