@@ -14,8 +14,9 @@ The whole chain, offline, in well under a minute:
    noise at a stated in-band SNR, and the truth of every frame;
 4. **receiver** — :func:`seamodem.receive.receive_file` detects every frame,
    measures range and closing speed, and decodes the payload;
-5. **navigation** — the 6-state EKF of paper 000 ("proposed": range + v_r) and
-   its range-only baseline ("rosb") position the vehicle from those records
+5. **navigation** — the inertial filter (IMU as input, heading bias as a state) and
+   its batch smoother, beside the 6-state EKF of paper 000 ("proposed": range + v_r)
+   and its range-only baseline ("rosb"), position the vehicle from those records
    plus the IMU (:func:`seamodem.navigation.track.run_track`);
 6. **emulated twin** — the same mission, the same IMU samples, but range and v_r
    emulated from the geometry with the noise levels the receiver actually
@@ -57,8 +58,14 @@ __all__ = [
     "format_summary",
 ]
 
-#: Positioning filters compared by the demo (paper 000: proposed = range + v_r; ROSB = range only).
-FILTERS = ("proposed", "rosb")
+#: Positioning filters compared by the demo: the inertial filter and its batch smoother (docs/navigation.md),
+#: and paper 000's EKF (proposed = range + v_r) and ROSB (range only).
+FILTERS = ("inertial", "batch", "proposed", "rosb")
+
+#: Their names in the summary and the figures, and their line colours.
+FILTER_LABELS = {"inertial": "inertial filter", "batch": "batch smoother", "proposed": "paper 000 EKF",
+                 "rosb": "paper 000 ROSB"}
+FILTER_COLOURS = {"inertial": "C0", "batch": "C2", "proposed": "C3", "rosb": "C1"}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -347,8 +354,10 @@ def navigate(meas: dict, vehicle: VehicleRun, cfg: DemoConfig, *, filter: str) -
     """
     from .navigation.track import run_track
 
+    smooth = "batch" if filter == "batch" else None
     out = run_track(meas, vehicle.imu, beacon_xy=cfg.beacon_xy_m, start_xy=tuple(vehicle.xy_m[0]),
-                    start_speed_mps=float(vehicle.speed_mps[0]), filter=filter)
+                    start_speed_mps=float(vehicle.speed_mps[0]), filter="inertial" if smooth else filter,
+                    smooth=smooth)
     # keep the state after each IMU sample (acoustic updates fall between them)
     t = out["t_s"]
     last = np.r_[t[1:] != t[:-1], True]
@@ -457,8 +466,10 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         },
         "emulated_noise": {"sigma_range_m": sigma_r, "sigma_v_r_mps": sigma_v,
                            "definition": "RMS of the receiver's errors against the channel truth, this run"},
-        "filter": "paper 000 6-state EKF, R = eq 25 (12 m², 0.2 m²/s², 1, 0.005, 0.005), Q = Δt⁸ I6, "
-                  "starts at the true position and speed",
+        "filter": {"inertial": "inertial filter (navigation.inertial), R from each record's sigma with the "
+                               "nav track floors; batch: its batch smoother",
+                   "proposed": "paper 000 6-state EKF, R = eq 25 (12 m², 0.2 m²/s², 1, 0.005, 0.005), Q = Δt⁸ I6",
+                   "start": "the true position and speed"},
         "wall_time_s": {
             "vehicle_beacon_channel": clock["channel"] - clock["start"],
             "receiver_decoder": clock["receiver"] - clock["channel"],
@@ -482,7 +493,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         tr = tracks[("waveform", f)]
         _write_csv(out / f"track_{f}.csv", {"t_s": tr["t_s"], "x_m": tr["xy_m"][:, 0], "y_m": tr["xy_m"][:, 1],
                                              "error_m": tr["error_m"]})
-    files += ["demo_config.json", "measurements.csv", "imu.csv", "truth.csv", "track_proposed.csv", "track_rosb.csv"]
+    files += ["demo_config.json", "measurements.csv", "imu.csv", "truth.csv"] + [f"track_{f}.csv" for f in FILTERS]
     if plots:
         plot_map(out / "map.png", cfg, vehicle, tracks, summary)
         plot_errors(out / "errors.png", tracks, errs)
@@ -539,13 +550,13 @@ def format_summary(summary: dict) -> str:
         f"v_r vs truth:   RMSE {100 * s['v_r_rmse_mps']:.2f} cm/s (bias {100 * s['v_r_bias_mps']:+.2f} cm/s; "
         f"median CRLB {100 * s['v_r_crlb_median_mps']:.3f} cm/s)",
         "positioning error (mean / RMS / final, m):",
-        f"  {'':34} {'proposed (range + v_r)':>24} {'ROSB (range only)':>22}",
+        f"  {'':34}" + "".join(f" {FILTER_LABELS[f]:>20}" for f in FILTERS),
     ]
     labels = {"waveform": "from the decoded frames", "emulated": "emulated (geometry + same noise)"}
     for source in ("waveform", "emulated"):
-        a, b = pos[source]["proposed"], pos[source]["rosb"]
-        lines.append(f"  {labels[source]:34} {a['mean_error_m']:>8.2f} / {a['rms_error_m']:.2f} / {a['final_error_m']:.2f}"
-                     f" {b['mean_error_m']:>8.2f} / {b['rms_error_m']:.2f} / {b['final_error_m']:.2f}")
+        cells = [pos[source][f] for f in FILTERS]
+        lines.append(f"  {labels[source]:34}" + "".join(
+            f" {c['mean_error_m']:>8.2f} / {c['rms_error_m']:.2f} / {c['final_error_m']:.2f}" for c in cells))
     w = s["wall_time_s"]
     lines.append(f"wall time: {w.get('total', math.nan):.1f} s (beacon + channel {w['vehicle_beacon_channel']:.1f} s, "
                  f"receiver + decoder {w['receiver_decoder']:.1f} s, filters {w['navigation']:.1f} s)")
@@ -576,12 +587,11 @@ def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: 
     ax.plot(plan[:, 0], plan[:, 1], color="0.75", lw=3, label="survey plan")
     ax.plot(*vehicle.xy_m[end].T, color="k", lw=1.5, label="true track")
     pos = summary["positioning"]["waveform"]
-    for f, colour in zip(FILTERS, ("C0", "C3")):
+    for f in FILTERS:
         tr = tracks[("waveform", f)]
         keep = tr["t_s"] <= summary["mission_s"]
-        name = "proposed EKF (range + v_r)" if f == "proposed" else "ROSB (range only)"
-        ax.plot(*tr["xy_m"][keep].T, color=colour, lw=1.2, ls="-" if f == "proposed" else "--",
-                label=f"{name}: mean error {pos[f]['mean_error_m']:.2f} m")
+        ax.plot(*tr["xy_m"][keep].T, color=FILTER_COLOURS[f], lw=1.2, ls="-" if f in ("inertial", "batch") else "--",
+                label=f"{FILTER_LABELS[f]}: mean error {pos[f]['mean_error_m']:.2f} m")
     ax.plot(*cfg.beacon_xy_m, marker="^", color="C2", ms=12, ls="none", label="beacon")
     ax.plot(*vehicle.xy_m[0], marker="o", color="k", ms=6, ls="none", label="start (GNSS fix)")
     ax.set(xlabel="east [m]", ylabel="north [m]", aspect="equal",
@@ -596,11 +606,11 @@ def plot_errors(path, tracks: dict, errs: dict) -> None:
     """Position error over time (both filters, decoded and emulated measurements); range and v_r errors per frame."""
     fig, axes = _figure(3, 1, figsize=(9, 9), constrained_layout=True)
     ax = axes[0]
-    for f, colour in zip(FILTERS, ("C0", "C3")):
+    for f in FILTERS:
         for source, ls in (("waveform", "-"), ("emulated", ":")):
             tr = tracks[(source, f)]
-            ax.plot(tr["t_s"], tr["error_m"], color=colour, ls=ls, lw=1.0,
-                    label=f"{f}, {'decoded frames' if source == 'waveform' else 'emulated measurements'}")
+            ax.plot(tr["t_s"], tr["error_m"], color=FILTER_COLOURS[f], ls=ls, lw=1.0,
+                    label=f"{FILTER_LABELS[f]}, {'decoded frames' if source == 'waveform' else 'emulated measurements'}")
     ax.set(xlabel="time [s]", ylabel="position error [m]", title="positioning error")
     ax.legend(fontsize=8)
     axes[1].plot(errs["t_arrival_s"], 100 * errs["range_error_m"], "o", ms=3)

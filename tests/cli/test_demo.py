@@ -22,7 +22,7 @@ def test_short_demo_positions_the_vehicle_from_decoded_frames(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "frames: 4 emitted, 4 detected" in printed
     for name in ("summary.json", "demo_config.json", "measurements.csv", "imu.csv", "truth.csv",
-                 "track_proposed.csv", "track_rosb.csv", "map.png", "errors.png", "psd.png", "constellation.png"):
+                 "track_inertial.csv", "track_batch.csv", "track_proposed.csv", "track_rosb.csv", "map.png", "errors.png", "psd.png", "constellation.png"):
         assert (out / name).stat().st_size > 0, name
     summary = json.loads((out / "summary.json").read_text())
     # frames at 0, 3, 6, 9 s, all above 9 dB in-band SNR: every one is found and its payload comes back
@@ -40,8 +40,8 @@ def test_short_demo_positions_the_vehicle_from_decoded_frames(tmp_path, capsys):
     assert [r["payload_text"] for r in meas] == [f"seamodem demo frame {k}" for k in range(4)]
     # the filters start at the GNSS fix: after 12 s of IMU and 4 fixes they have drifted by less than a metre
     for source in ("waveform", "emulated"):
-        for f in ("proposed", "rosb"):
-            assert summary["positioning"][source][f]["mean_error_m"] < 1.0
+        for f in ("inertial", "batch", "proposed", "rosb"):
+            assert summary["positioning"][source][f]["mean_error_m"] < 1.0, (source, f)
 
 
 def test_demo_bad_options_are_one_line_errors(tmp_path, capsys):
