@@ -31,6 +31,16 @@ BEACON = np.array([50.0, 100.0])
 SHORT = {"lane_length_m": 30.0, "n_lanes": 2}
 
 
+def _short_mission(run):
+    """Config, truth and filter run of a short truth-steered mission at 5 cm / 5 cm/s (seed 0, run ``run``)."""
+    config = MissionConfig(noise=NoiseModel(sigma_range_m=0.05, sigma_vr_mps=0.05), steer_on_estimate=False,
+                           path=SHORT)
+    ref, _ = config.reference()
+    _, _, truth, det = simulate_inertial_mission(config, mission_noise(0, run, ref.shape[0] - 1), filter="batch",
+                                                 reference=ref)
+    return config, truth, det["filter_run"]
+
+
 def _state(cfg, rng):
     z = rng.normal(size=cfg.n_states) * 0.1
     z[:4] = 30.0, -20.0, 0.7, 1.2
@@ -127,12 +137,7 @@ def test_iterated_update_reaches_the_posterior_mode():
 
 
 def test_outlier_frame_is_gated_and_reported():
-    noise = NoiseModel(sigma_range_m=0.05, sigma_vr_mps=0.05)
-    config = MissionConfig(noise=noise, steer_on_estimate=False, path=SHORT)
-    ref, _ = config.reference()
-    n = ref.shape[0] - 1
-    _, _, truth, det = simulate_inertial_mission(config, mission_noise(0, 0, n), filter="batch", reference=ref)
-    run = det["filter_run"]
+    config, _, run = _short_mission(0)
     nodes = run.nodes
     meas = nodes.meas.copy()
     k = np.flatnonzero(nodes.has_acoustic)[5]
@@ -160,12 +165,7 @@ def test_mission_kernel_equals_filter_over_its_sensors():
 
 
 def test_fixed_lag_limits_are_the_filter_and_the_rts_smoother():
-    noise = NoiseModel(sigma_range_m=0.05, sigma_vr_mps=0.05)
-    config = MissionConfig(noise=noise, steer_on_estimate=False, path=SHORT)
-    ref, _ = config.reference()
-    _, _, _, det = simulate_inertial_mission(config, mission_noise(0, 2, ref.shape[0] - 1), filter="batch",
-                                             reference=ref)
-    run = det["filter_run"]
+    _, _, run = _short_mission(2)
     short = fixed_lag_smooth(run, lag_s=0.01)
     assert np.allclose(short.states, run.states) and np.allclose(short.covariances, run.covariances)
     long = fixed_lag_smooth(run, lag_s=1e6)
@@ -227,12 +227,7 @@ def test_batch_smoother_is_the_least_squares_solution():
 
 
 def test_gnss_fix_pulls_the_track_and_shrinks_the_covariance():
-    noise = NoiseModel(sigma_range_m=0.05, sigma_vr_mps=0.05)
-    config = MissionConfig(noise=noise, steer_on_estimate=False, path=SHORT)
-    ref, _ = config.reference()
-    _, _, truth, det = simulate_inertial_mission(config, mission_noise(0, 3, ref.shape[0] - 1), filter="batch",
-                                                 reference=ref)
-    run = det["filter_run"]
+    config, truth, run = _short_mission(3)
     k = len(run.nodes) // 2
     fixed = add_fixes(run.nodes, [run.nodes.t_s[k]], [truth[k, 0]], [truth[k, 1]], 0.05)
     again = run_filter(fixed, run.config, beacon_xy=config.beacon_xy, z0=run.z0, P0=run.P0)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .inertial import _motion, _propagate_cov, _update_acoustic, _update_heading
+from .inertial import _gated_acoustic, _predict, _update_heading
 from .vehicle import feedback_command, vehicle_step
 
 
@@ -82,12 +82,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         accel_m = accel_true + sigmas[2] * noise[k, 2]
         sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
         sensors[k, 3] = sensors[k, 4] = np.nan
-        _motion(z, lay, omega_m, accel_m, dt, zp, F)
-        _propagate_cov(P, F, qd, dt, A, Pp)
-        for a in range(m):
-            z[a] = zp[a]
-            for b in range(m):
-                P[a, b] = Pp[a, b]
+        _predict(z, P, lay, qd, omega_m, accel_m, dt, zp, F, A, Pp)
         if k % com_every == 0:
             dx, dy = x - beacon[0], y - beacon[1]
             d_true = np.sqrt(dx * dx + dy * dy)
@@ -96,16 +91,9 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
             meas[0] = scale * d_true + sigmas[4] * noise[k, 4]
             meas[1] = scale * vr_true + sigmas[5] * noise[k, 5]
             sensors[k, 3], sensors[k, 4] = meas[0], meas[1]
-            force = gated_run >= gate_reset_after
-            nis, ok = _update_acoustic(z, P, lay, beacon, meas, meas_var, True, use_vr, gate, iterations, force,
-                                       work, Hw, second_order)
-            nis_out[k] = nis
-            if ok:
-                status[k] = 3 if (force and nis > gate) else 1
-                gated_run = 0
-            else:
-                status[k] = 2
-                gated_run += 1
+            nis_out[k], status[k], gated_run = _gated_acoustic(z, P, lay, beacon, meas, meas_var, True, use_vr,
+                                                               gate, gate_reset_after, gated_run, iterations,
+                                                               second_order, work, Hw)
         _update_heading(z, P, head_m, heading_var, ph)
         estimate[k, 0], estimate[k, 1] = z[0], z[1]
         truth[k, 0], truth[k, 1] = x, y
