@@ -1,0 +1,151 @@
+"""Impulse blanking ahead of the receiver: clicks (snapping shrimp) zeroed in the passband.
+
+Impulsive noise is wideband and short; once the front end's band-pass filters
+have smeared a click over milliseconds it can no longer be told from the
+signal. So the passband input is blanked first, the standard nonlinearity
+ahead of a receiver in impulsive noise (Zhidkov 2008; Mirza et al. for
+shrimp-dominated underwater channels):
+
+1. a robust scale of the input is measured per chunk of ``chunk`` samples,
+   σ̂ = 1.4826 · median|x| (the MAD of a zero-mean signal; a Gaussian's σ),
+   which up to half of a chunk's samples being impulses do not move;
+2. a sample is an impulse when |x| > ``threshold`` · the largest σ̂ of its
+   chunk and the chunks either side (so that a frame's onset within a chunk
+   is not taken for an impulse: the next chunk already holds the signal);
+3. every impulse sample and ``guard`` samples either side are set to zero.
+
+In white Gaussian noise a sample exceeds 5σ with probability 5.7e-7, so with
+the default guard about 2e-5 of the samples are blanked: no measurable loss
+(benchmarks/bench_doppler_paths.py). The blanker is streaming: it holds one
+chunk back. Its output does not depend on how the input is split in blocks,
+except within ``guard`` samples before a held-back chunk, whose impulses are
+judged against a provisional scale (the final one is never smaller, so such a
+guard can only blank a few samples more).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["ImpulseBlanker", "blank_impulses"]
+
+#: median|x| of a zero-mean Gaussian is 0.6745σ
+_MAD_TO_SIGMA = 1.0 / 0.6744897501960817
+
+
+class ImpulseBlanker:
+    """Streaming impulse blanker on real passband samples.
+
+    Parameters
+    ----------
+    threshold : float
+        Impulse level in robust standard deviations (default 5).
+    chunk : int
+        Samples per robust-scale estimate (default 256, 2.7 ms at 96 kHz).
+    guard : int
+        Samples blanked on either side of an impulse sample (default 16).
+
+    Attributes
+    ----------
+    n_blanked : int
+        Samples blanked so far.
+
+    Examples
+    --------
+    >>> x = np.random.default_rng(0).standard_normal(10_000)
+    >>> x[5000] = 100.0
+    >>> b = ImpulseBlanker()
+    >>> y = np.concatenate([b.push(x), b.flush()])
+    >>> float(y[5000]), b.n_blanked, b.blanked_fraction(0, 10_000)
+    (0.0, 33, 0.0033)
+    """
+
+    def __init__(self, *, threshold: float = 5.0, chunk: int = 256, guard: int = 16):
+        if not (math.isfinite(threshold) and threshold > 0):
+            raise ValueError(f"threshold must be > 0, got {threshold!r}")
+        self.threshold = float(threshold)
+        self.chunk = int(chunk)
+        self.guard = int(guard)
+        self._pending = np.zeros(0)
+        self._start = 0  # input index of _pending[0]
+        self._prev_scale: float | None = None
+        self._carry = 0  # leading samples of the next output that an earlier impulse's guard covers
+        self._starts: list[np.ndarray] = []
+        self._stops: list[np.ndarray] = []
+        self.n_blanked = 0
+
+    def push(self, x_pb: np.ndarray) -> np.ndarray:
+        """Add samples; return the blanked samples that are final (one chunk is held back)."""
+        self._pending = np.concatenate([self._pending, np.asarray(x_pb, dtype=np.float64)])
+        n_chunks = len(self._pending) // self.chunk
+        if n_chunks < 2:
+            return np.zeros(0)
+        return self._process((n_chunks - 1) * self.chunk)
+
+    def flush(self) -> np.ndarray:
+        """End of input: the samples held back."""
+        if len(self._pending) == 0:
+            return np.zeros(0)
+        return self._process(len(self._pending))
+
+    def blanked_fraction(self, start: int, stop: int) -> float:
+        """Fraction of the input samples [start, stop) blanked (indices from the first input sample)."""
+        if stop <= start or not self._starts:
+            return 0.0
+        a, b = np.concatenate(self._starts), np.concatenate(self._stops)
+        overlap = np.clip(np.minimum(b, stop) - np.maximum(a, start), 0, None)
+        return float(np.sum(overlap) / (stop - start))
+
+    def forget_before(self, index: int) -> None:
+        """Drop the blanked intervals that end before input sample ``index`` (bounded memory)."""
+        if not self._starts:
+            return
+        a, b = np.concatenate(self._starts), np.concatenate(self._stops)
+        keep = b > index
+        self._starts, self._stops = [a[keep]], [b[keep]]
+
+    def _process(self, n_final: int) -> np.ndarray:
+        buf = self._pending
+        L = self.chunk
+        n_chunks = -(-len(buf) // L)
+        padded = np.full(n_chunks * L, np.nan)
+        padded[: len(buf)] = np.abs(buf)
+        scales = _MAD_TO_SIGMA * np.nanmedian(padded.reshape(n_chunks, L), axis=1)
+        left = scales[0] if self._prev_scale is None else self._prev_scale
+        ext = np.concatenate([[left], scales, [scales[-1]]])
+        ref = np.maximum(np.maximum(ext[:-2], ext[1:-1]), ext[2:])
+        limit = np.where(ref > 0, self.threshold * ref, np.inf)
+        hit = np.abs(buf) > np.repeat(limit, L)[: len(buf)]
+        mask = _dilate(hit, self.guard)
+        mask[: min(self._carry, len(mask))] = True
+        out = buf[:n_final].copy()
+        final_mask = mask[:n_final]
+        out[final_mask] = 0.0
+        hits = np.flatnonzero(hit[:n_final])
+        self._carry = max(0, int(hits[-1]) + self.guard + 1 - n_final) if hits.size else 0
+        if final_mask.any():
+            edges = np.diff(np.concatenate([[False], final_mask, [False]]).astype(np.int8))
+            self._starts.append(self._start + np.flatnonzero(edges == 1))
+            self._stops.append(self._start + np.flatnonzero(edges == -1))
+            self.n_blanked += int(np.count_nonzero(final_mask))
+        self._prev_scale = float(scales[max(0, n_final // L - 1)])
+        self._pending = buf[n_final:]
+        self._start += n_final
+        return out
+
+
+def _dilate(hit: np.ndarray, guard: int) -> np.ndarray:
+    """True within ``guard`` samples of any True of ``hit``."""
+    if not hit.any() or guard <= 0:
+        return hit.copy()
+    counts = np.convolve(hit.astype(np.int32), np.ones(2 * guard + 1, dtype=np.int32), mode="same")
+    return counts > 0
+
+
+def blank_impulses(x_pb: np.ndarray, **options) -> tuple[np.ndarray, float]:
+    """A whole recording blanked at once: (blanked copy, fraction of samples blanked)."""
+    b = ImpulseBlanker(**options)
+    y = np.concatenate([b.push(x_pb), b.flush()])
+    return y, b.n_blanked / max(len(y), 1)

@@ -1,0 +1,114 @@
+"""Whole-frame path-resolved Doppler (receive/wholeframe.py) and impulse blanking (receive/impulse.py)
+on analytic frames: paths summed directly, each its own exactly time-scaled copy of the transmitted
+passband (tests/receive/analytic.py), clicks written at known positions."""
+
+import numpy as np
+import pytest
+
+from seamodem import build_frame, get_preset
+from seamodem.receive.frontend import FrontEnd, plan_front_end
+from seamodem.receive.impulse import ImpulseBlanker, blank_impulses
+from seamodem.receive.wholeframe import fit_whole_frame, known_signal_velocity_crlb_mps
+
+from analytic import awgn_sigma, received_frame
+
+CFG = get_preset("jmse2024")
+FS = CFG.sample_rate_hz
+C = 1500.0
+FRAME = build_frame(CFG, b"whole frame")
+V = 1.8
+# deep water: a surface and a bottom echo 2 and 3.5 ms late, 5 and 9 cm/s slower than the direct path
+PATHS = ((0.0, 1.0, 0.0), (2.0e-3, -0.8, -0.05), (3.5e-3, 0.6, -0.09))
+
+
+def _received(seed, snr_db, clicks=0):
+    rng = np.random.default_rng(seed)
+    ta = 0.1 + rng.uniform(0, 0.01)
+    total = int(0.5 * FS)
+    t = np.arange(total) / FS
+    x = np.zeros(total)
+    for delay, gain, dv in PATHS:
+        x += received_frame(FRAME, t, t_arrival_s=ta + delay, v_mps=V + dv, gain=gain)
+    sigma = awgn_sigma(CFG, snr_db)
+    x += sigma * rng.standard_normal(total)
+    for k in rng.integers(int(0.1 * FS), int(0.45 * FS), clicks):
+        # a snapping-shrimp-like click: a 0.1 ms damped wideband burst, 30 dB above the noise floor
+        n = np.arange(40)
+        x[k : k + 40] += 31.6 * sigma * np.exp(-n / 10) * np.cos(2 * np.pi * 0.3 * n + rng.uniform(0, 6.3))
+    return x, ta
+
+
+def _fit(x, ta):
+    plan = plan_front_end(CFG, FS, v_max_mps=5, sound_speed_mps=C)
+    fe = FrontEnd(plan)
+    bb = np.concatenate([fe.push(x)[0], fe.flush()[0]])
+    return fit_whole_frame(
+        bb, plan.fs_data, 0.0, config=CFG, symbols=FRAME.symbols, reference=np.ones(len(FRAME.symbols), bool),
+        delays_s=[ta + d for d, _, _ in PATHS], v_mps=V + 0.05, sound_speed_mps=C,
+    )
+
+
+def test_each_paths_doppler_within_its_bound():
+    truth = np.array([V + dv for _, _, dv in PATHS])
+    errors, crlbs, sigmas = [], [], []
+    for seed in range(4):
+        fit = _fit(*_received(seed, 12.0))
+        errors.append(fit.v_mps - truth)
+        crlbs.append(fit.crlb_v_mps)
+        sigmas.append(fit.sigma_v_mps)
+    errors, crlbs, sigmas = map(np.array, (errors, crlbs, sigmas))
+    # every path, every frame within 3.5 of its own σ, and σ never below the CRLB
+    assert np.all(np.abs(errors) <= 3.5 * sigmas)
+    assert np.all(sigmas >= crlbs)
+    # RMS over 4 frames near the bound: 2× leaves room for the χ² scatter of 4 samples
+    assert np.all(np.sqrt(np.mean(errors**2, axis=0)) <= 2.0 * np.mean(crlbs, axis=0))
+    # the direct path's bound at 12 dB is about half a mm/s (SPEC §6: 0.5 mm/s at 10 dB, all power)
+    assert 2e-4 < np.mean(crlbs[:, 0]) < 8e-4
+
+
+def test_known_signal_bound_is_the_tone_bound_with_the_data_band():
+    # SPEC §6: C/N0 = R·Es/N0; 1856 symbols (0.29 s) at Es/N0 = 10 dB → c/f0·√(3/(2π²·64000·0.29³))
+    sigma = known_signal_velocity_crlb_mps(CFG, 10.0, 1856, sound_speed_mps=C)
+    expected = C / CFG.carrier_hz * np.sqrt(3 / (2 * np.pi**2 * 64000 * (1856 / 6400) ** 3))
+    assert sigma == pytest.approx(expected, rel=1e-12)
+
+
+def test_clicks_at_known_positions_do_not_move_the_estimate_beyond_its_sigma():
+    x, ta = _received(7, 12.0)
+    clean = _fit(x, ta)
+    xc, _ = _received(7, 12.0, clicks=60)  # same noise, 200 clicks per second over 0.3 s
+    raw = _fit(xc, ta)
+    blanked, fraction = blank_impulses(xc)
+    fit = _fit(blanked, ta)
+    # 60 clicks of ≲ 40 samples + 2·16 guard in 48 000 samples: at most 4.5 %
+    assert 0 < fraction <= 60 * 72 / len(xc)
+    # blanked: within the clean frame's σ of the clean estimate, for the direct path
+    assert abs(fit.v_mps[0] - clean.v_mps[0]) <= clean.sigma_v_mps[0]
+    # without blanking the clicks cost (what the blanker is for): a larger σ
+    assert raw.sigma_v_mps[0] > 1.5 * fit.sigma_v_mps[0]
+
+
+def test_blanker_zeroes_an_impulse_and_its_guard_only():
+    x = np.random.default_rng(0).standard_normal(20_000)
+    x[5000] = 80.0
+    b = ImpulseBlanker(guard=16)
+    y = np.concatenate([b.push(x[:7000]), b.push(x[7000:]), b.flush()])
+    assert len(y) == len(x)
+    assert np.all(y[4984:5017] == 0.0)
+    untouched = np.ones(len(x), bool)
+    untouched[4984:5017] = False
+    np.testing.assert_array_equal(y[untouched], x[untouched])
+    assert b.blanked_fraction(0, 20_000) == pytest.approx(33 / 20_000)
+
+
+def test_blanker_leaves_white_noise_and_a_frame_onset_alone():
+    # a Gaussian sample beyond 5σ: p = 5.7e-7, so ≈ 33 · 5.7e-7 = 2e-5 of white noise is blanked
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(2_000_000)
+    _, fraction = blank_impulses(x)
+    assert fraction < 1e-4
+    # a strong frame (40 dB) starting after silence-level noise: its onset is not an impulse
+    t = np.arange(int(0.5 * FS)) / FS
+    s = received_frame(FRAME, t, t_arrival_s=0.1003) + awgn_sigma(CFG, 40.0) * rng.standard_normal(len(t))
+    _, fraction = blank_impulses(s)
+    assert fraction == 0.0
