@@ -118,10 +118,9 @@ def main():
         print(f"{e:>10.1f} {f:>10.3f}")
 
     if args.plot:
-        import matplotlib
+        from seamodem.plots import _pyplot, save_figure
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        plt = _pyplot()
 
         fig, ax = plt.subplots(figsize=(7, 5), constrained_layout=True)
         fine = np.linspace(0, 10, 200)
@@ -133,7 +132,7 @@ def main():
         ax.grid(True, which="both", alpha=0.3)
         ax.legend()
         Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(args.plot, dpi=100)
+        save_figure(fig, args.plot)
         print(f"\nwrote {args.plot}")
 
 

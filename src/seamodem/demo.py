@@ -42,6 +42,7 @@ import numpy as np
 from . import __version__
 from .config import FrameConfig, get_preset
 from .errors import ConfigError
+from .plots import save_figure
 
 __all__ = [
     "DemoConfig",
@@ -196,9 +197,11 @@ def simulate_vehicle(cfg: DemoConfig, *, t_end_s: float, rng: np.random.Generato
     The vehicle starts on the path with its heading and speed; the controller
     (paper 000 eq 2, limits |Ω| ≤ 0.5 rad/s, |a| ≤ 0.5 m/s²) steers on the true
     state — the recording must exist before the filters run, so they cannot
-    close the loop. IMU: heading + bias random walk + white noise, turn rate
-    and acceleration + white noise (the Monte Carlo's conventions).
+    close the loop. IMU: :mod:`seamodem.navigation.imu` (the Monte Carlo's model),
+    its bias random walk starting from one step's draw rather than from 0 (the
+    sensor ran before the mission began).
     """
+    from .navigation.imu import imu_sigmas, simulate_imu
     from .navigation.vehicle import feedback_command, vehicle_step
 
     path = cfg.path()
@@ -221,16 +224,12 @@ def simulate_vehicle(cfg: DemoConfig, *, t_end_s: float, rng: np.random.Generato
             x, y, psi, v = vehicle_step(x, y, psi, v, omega, accel, dt, v_min, v_max)
             xy[k + 1], heading[k + 1], speed[k + 1] = (x, y), psi, v
             omega_true[k + 1], accel_true[k + 1] = omega, (v - v_old) / dt
-    drift = math.radians(cfg.heading_drift_deg_per_h) * math.sqrt(dt / 3600.0)
+    sigmas = imu_sigmas(sigma_heading_deg=cfg.sigma_heading_deg, heading_drift_deg_per_h=cfg.heading_drift_deg_per_h,
+                        sigma_omega_rad_s=cfg.sigma_omega_rad_s, sigma_accel_mps2=cfg.sigma_accel_mps2, dt_s=dt)
     noise = rng.standard_normal((n, 4))
-    bias = np.cumsum(drift * noise[:, 3])
-    imu = {
-        "t_s": t,
-        "heading_rad": heading + bias + math.radians(cfg.sigma_heading_deg) * noise[:, 0],
-        "omega_rad_s": omega_true + cfg.sigma_omega_rad_s * noise[:, 1],
-        "accel_mps2": accel_true + cfg.sigma_accel_mps2 * noise[:, 2],
-    }
-    return VehicleRun(t, xy, heading, speed, imu)
+    readings, _ = simulate_imu(heading, omega_true, accel_true, noise, sigmas, dt_s=dt,
+                               bias0_rad=sigmas[3] * noise[0, 3])
+    return VehicleRun(t, xy, heading, speed, {"t_s": t, **readings})
 
 
 def make_scenario(cfg: DemoConfig, track_csv: Path) -> dict[str, Any]:
@@ -403,6 +402,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
     images_dir : str or Path, optional
         Also copy ``map.png`` there as ``demo_map.png`` (the README's picture).
     """
+    from .navigation.paper import eq25_text
     from .receive import write_measurements
 
     out = Path(output_dir)
@@ -468,7 +468,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
                            "definition": "RMS of the receiver's errors against the channel truth, this run"},
         "filter": {"inertial": "inertial filter (navigation.inertial), R from each record's sigma with the "
                                "nav track floors; batch: its batch smoother",
-                   "proposed": "paper 000 6-state EKF, R = eq 25 (12 m², 0.2 m²/s², 1, 0.005, 0.005), Q = Δt⁸ I6",
+                   "proposed": f"paper 000 6-state EKF, {eq25_text()}",
                    "start": "the true position and speed"},
         "wall_time_s": {
             "vehicle_beacon_channel": clock["channel"] - clock["start"],
@@ -572,13 +572,6 @@ def _figure(*args, **kwargs):
     return _pyplot().subplots(*args, **kwargs)
 
 
-def _save(fig, path) -> None:
-    fig.savefig(path, dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-
-
 def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: dict) -> None:
     """Top view: the desired survey, the true track, both filters' estimates from the decoded frames, the beacon."""
     fig, ax = _figure(figsize=(7, 6), constrained_layout=True)
@@ -599,7 +592,7 @@ def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: 
                  f"({summary['payloads_correct']} payloads decoded)")
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path, dpi=110)
 
 
 def plot_errors(path, tracks: dict, errs: dict) -> None:
@@ -619,7 +612,7 @@ def plot_errors(path, tracks: dict, errs: dict) -> None:
     axes[2].set(xlabel="arrival time [s]", ylabel="v_r error [cm/s]", title="receiver v_r − truth (direct path)")
     for ax in axes:
         ax.grid(alpha=0.3)
-    _save(fig, path)
+    save_figure(fig, path, dpi=110)
 
 
 def plot_psd(path, psd, config: FrameConfig) -> None:
@@ -634,7 +627,7 @@ def plot_psd(path, psd, config: FrameConfig) -> None:
            title="received: the first frame (direct, surface and bottom paths, noise)")
     ax.grid(alpha=0.3)
     ax.legend()
-    _save(fig, path)
+    save_figure(fig, path, dpi=110)
 
 
 def plot_constellation(path, grabbed, config: FrameConfig, sidecar: dict) -> None:
@@ -661,4 +654,4 @@ def plot_constellation(path, grabbed, config: FrameConfig, sidecar: dict) -> Non
         ax.set(xlabel="in-phase", ylabel="quadrature", title=title, aspect="equal", xlim=(-2, 2), ylim=(-2, 2))
         ax.grid(alpha=0.3)
     fig.suptitle(f"one received frame, data symbols (t_arrival = {m.pilot.t_start_s:.2f} s)")
-    _save(fig, path)
+    save_figure(fig, path, dpi=110)

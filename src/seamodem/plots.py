@@ -22,9 +22,20 @@ def _pyplot():
 
 
 def save_figure(fig, path: str | Path, *, dpi: int = 100) -> None:
-    """Write ``fig`` as a PNG at ``path`` and release it (every figure the package draws ends here)."""
-    fig.savefig(str(path), dpi=dpi, format="png")
-    _pyplot().close(fig)
+    """Write ``fig`` as a PNG at ``path`` and release it (every figure the package draws ends here).
+
+    The PNG is written to a temporary file beside ``path`` and renamed over it
+    (:func:`seamodem.io.files.atomic_outputs`): a failed or interrupted plot leaves
+    no partial image, and ``path`` need not end in ``.png``. The figure is closed
+    whether or not the write succeeds.
+    """
+    from .io.files import atomic_outputs
+
+    try:
+        with atomic_outputs(path) as (tmp,):
+            fig.savefig(tmp, dpi=dpi, format="png")
+    finally:
+        _pyplot().close(fig)
 
 
 def envelope(x: np.ndarray, n_bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

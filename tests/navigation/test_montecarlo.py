@@ -82,3 +82,21 @@ def test_config_errors_name_the_parameter():
     with pytest.raises(ConfigError, match="runs"):
         run_monte_carlo(MissionConfig(path=SHORT_PATH), runs=2)
     assert math.isclose(MissionConfig().process_variance, 0.25**8)
+
+
+def test_paper_filter_tuning_is_eq25_as_printed():
+    """Eq 25 as printed: R = diag(1, 0.005, 0.005, 12, 0.2) on the rows ψ, Ω, a, d, v_r of eq 22; Q = Δt⁸ I₆.
+
+    The mission defaults and the sensor noise the filter is told are that R, in eq 18's order (d, v_r, ψ, Ω, a).
+    """
+    from seamodem.navigation.montecarlo import NoiseModel
+    from seamodem.navigation.paper import EQ25_R_DIAG
+
+    printed = dict(zip(("psi", "omega", "a", "range", "v_r"), (1.0, 0.005, 0.005, 12.0, 0.2)))
+    eq18 = tuple(printed[k] for k in ("range", "v_r", "psi", "omega", "a"))
+    assert EQ25_R_DIAG == eq18
+    assert MissionConfig().r_diag == eq18
+    np.testing.assert_array_equal(MissionConfig(dt_s=0.5).process_diag, np.full(6, 0.5**8))
+    noise = NoiseModel()
+    assert (noise.sigma_range_m**2, noise.sigma_vr_mps**2, noise.sigma_omega_rad_s**2,
+            noise.sigma_accel_mps2**2) == pytest.approx((12.0, 0.2, 0.005, 0.005), rel=1e-15)

@@ -1,7 +1,8 @@
 """Compiled mission loop of paper 000's simulation: vehicle, sensors and 6-state EKF.
 
 One call runs one whole mission (≈ 6 200 steps); it is sequential by nature,
-hence numba. The pure-Python form of the same loop is
+hence numba. The IMU/AHRS readings are :mod:`.imu`'s model (the demo's and the
+reference's too). The pure-Python form of the same loop is
 :func:`seamodem.navigation.montecarlo.simulate_mission_reference`, built from
 :class:`~seamodem.navigation.ekf.ExtendedKalmanFilter` and
 :class:`~seamodem.navigation.models.Auv6Model`; the tests hold the two equal.
@@ -12,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .imu import bias_step, imu_reading
 from .vehicle import feedback_command, vehicle_step
 
 #: Columns of the standard-normal noise array a mission consumes.
@@ -171,7 +173,8 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
                 for j in range(6):
                     history[k, i, 2 + j] = P[i, j]
                     history[k, i, 14 + j] = F[i, j]
-        bias += sigmas[3] * noise[k, 3] + bias_rate * dt
+        bias = bias_step(bias, sigmas, noise, k, bias_rate, dt)
+        heading_m, omega_m, accel_m = imu_reading(psi, bias, omega, accel_true, sigmas, noise, k)
         rows = 0
         for i in range(5):
             for j in range(6):
@@ -192,9 +195,9 @@ def mission_kernel(reference, noise, start, sigmas, r_diag, p0_diag, beacon, dt,
                 H[1, 0], H[1, 1], H[1, 2], H[1, 3] = -b * dy, b * dx, -z[3] * np.sin(c_hat), -np.cos(c_hat)
                 r[1] = r_diag[1]
                 rows = 2
-        innov[rows] = _wrap(psi + bias + sigmas[0] * noise[k, 0] - z[2])
-        innov[rows + 1] = omega + sigmas[1] * noise[k, 1] - z[4]
-        innov[rows + 2] = accel_true + sigmas[2] * noise[k, 2] - z[5]
+        innov[rows] = _wrap(heading_m - z[2])
+        innov[rows + 1] = omega_m - z[4]
+        innov[rows + 2] = accel_m - z[5]
         H[rows, 2] = H[rows + 1, 4] = H[rows + 2, 5] = 1.0  # ψ, Ω, a are states: unit rows (eq 24)
         for i in range(3):
             r[rows + i] = r_diag[2 + i]

@@ -7,8 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..io.files import atomic_outputs
-from ..plots import _pyplot
+from ..plots import _pyplot, save_figure
 
 __all__ = ["plot_top_view", "plot_error_curves", "plot_track", "error_ellipses"]
 
@@ -171,9 +170,6 @@ def plot_track(t_s, estimate_xy, path: str | Path, *, beacon_xy, sigma_xy=None, 
 
 
 def _save(fig, path) -> None:
-    """Write ``fig`` as PNG atomically (``path`` may itself be a temporary name without the suffix)."""
-    plt = _pyplot()
+    """The navigation figures' layout and resolution (tight, 120 dpi), written by :func:`~seamodem.plots.save_figure`."""
     fig.tight_layout()
-    with atomic_outputs(path) as (tmp,):
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)

@@ -22,8 +22,10 @@ import numpy as np
 from ..errors import ConfigError
 from ._kernels import NOISE_COLUMNS, mission_kernel
 from .ekf import ExtendedKalmanFilter
+from .imu import bias_step, imu_reading, imu_sigmas
 from .inertial import InertialConfig
 from .models import Auv6Model, closing_speed
+from .paper import EQ25_ORDER, EQ25_R, EQ25_R_DIAG, eq25_q
 from .smoother import rts_smooth
 from .trajectories import boustrophedon
 from .vehicle import feedback_command, vehicle_step
@@ -79,7 +81,7 @@ PAPER_TABLE = {
 class NoiseModel:
     """Standard deviations of the emulated measurements.
 
-    Defaults are the square roots of the filter's R (paper 000 eq 25), i.e. a
+    Defaults are the square roots of the filter's R (paper 000 eq 25, :data:`.paper.EQ25_R`), i.e. a
     filter that is told the truth about its sensors, and the AHRS figures of
     paper 000 §3.5.3 (1° white heading noise, 5°/h bias instability). The paper
     shows its noises only as box plots (Fig. 6); these are our stated choice.
@@ -106,12 +108,12 @@ class NoiseModel:
         0.14°: docs/navigation.md shows what that difference does to a single-beacon fix.
     """
 
-    sigma_range_m: float = math.sqrt(12.0)
-    sigma_vr_mps: float = math.sqrt(0.2)
+    sigma_range_m: float = math.sqrt(EQ25_R["range"])
+    sigma_vr_mps: float = math.sqrt(EQ25_R["v_r"])
     sigma_heading_deg: float = 1.0
     heading_drift_deg_per_h: float = 5.0
-    sigma_omega_rad_s: float = math.sqrt(0.005)
-    sigma_accel_mps2: float = math.sqrt(0.005)
+    sigma_omega_rad_s: float = math.sqrt(EQ25_R["omega"])
+    sigma_accel_mps2: float = math.sqrt(EQ25_R["a"])
     heading_bias_model: str = "random_walk"
 
     def __post_init__(self):
@@ -125,18 +127,12 @@ class NoiseModel:
                 raise ConfigError(name, f"must be finite and >= 0, got {value!r}")
 
     def sigmas(self, dt_s: float) -> np.ndarray:
-        """Per-step standard deviations in :data:`NOISE_COLUMNS` order (SI units)."""
-        return np.array(
-            [
-                math.radians(self.sigma_heading_deg),
-                self.sigma_omega_rad_s,
-                self.sigma_accel_mps2,
-                math.radians(self.heading_drift_deg_per_h) * math.sqrt(dt_s / 3600.0)
-                if self.heading_bias_model == "random_walk" else 0.0,
-                self.sigma_range_m,
-                self.sigma_vr_mps,
-            ]
-        )
+        """Per-step standard deviations in :data:`NOISE_COLUMNS` order (SI units): the IMU's
+        (:func:`.imu.imu_sigmas`), then range and v_r."""
+        imu = imu_sigmas(sigma_heading_deg=self.sigma_heading_deg, heading_drift_deg_per_h=self.heading_drift_deg_per_h,
+                         sigma_omega_rad_s=self.sigma_omega_rad_s, sigma_accel_mps2=self.sigma_accel_mps2, dt_s=dt_s,
+                         bias_random_walk=self.heading_bias_model == "random_walk")
+        return np.r_[imu, self.sigma_range_m, self.sigma_vr_mps]
 
     def bias_rate(self, noise: np.ndarray) -> float:
         """The run's heading-bias drift rate [rad/s]: 0 for the random walk, else drawn from ``noise[0, 3]``.
@@ -177,7 +173,7 @@ class MissionConfig:
         Beacon position [m] (Table 2: (50, 100)).
     r_diag : tuple
         Filter R for (d, v_r, ψ, Ω, a) — eq 25's diag(1, 0.005, 0.005, 12, 0.2)
-        in eq 18's order.
+        in eq 18's order (:data:`.paper.EQ25_R_DIAG`).
     q : float, tuple of 6 floats, or None
         Process noise variance per step: one value for every state, or one per
         state (x, y, ψ, v, Ω, a); ``None`` means Δt⁸ for all (eq 25).
@@ -222,7 +218,7 @@ class MissionConfig:
     tcom_s: float = 3.0
     dt_s: float = 0.25
     beacon_xy: tuple = (50.0, 100.0)
-    r_diag: tuple = (12.0, 0.2, 1.0, 0.005, 0.005)
+    r_diag: tuple = EQ25_R_DIAG
     q: float | None = None
     p0_diag: tuple = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     steer_on_estimate: bool = True
@@ -274,7 +270,7 @@ class MissionConfig:
     def process_diag(self) -> np.ndarray:
         """Diagonal of the filter's Q per step, (x, y, ψ, v, Ω, a)."""
         if self.q is None:
-            return np.full(6, self.dt_s**8)
+            return np.full(6, eq25_q(self.dt_s))
         return np.broadcast_to(np.asarray(self.q, dtype=float), (6,)).copy()
 
     @property
@@ -424,7 +420,8 @@ def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filt
     """The same mission as :func:`simulate_mission`, written with the general EKF class.
 
     This is the pure-Python form the compiled kernel is tested against (and the
-    timing reference of ``benchmarks/bench_navigation.py``). ``filter_factory``
+    timing reference of ``benchmarks/bench_navigation.py``); the IMU readings are
+    :mod:`.imu`'s, the same functions the kernel calls. ``filter_factory``
     (x0, P0, Q, model) → object with ``predict(t_s)`` / ``update(z, kind, R)`` and
     ``x`` lets the benchmark plug in another EKF implementation.
     """
@@ -442,13 +439,14 @@ def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filt
     Q = np.diag(config.process_diag)
     factory = filter_factory or (lambda x0, P0, Q, model: ExtendedKalmanFilter(model, x0, P0, Q))
     ekf = factory(x0, P0, Q, model)
-    r = dict(zip(("range", "v_r", "psi", "omega", "a"), config.r_diag))
+    r = dict(zip(EQ25_ORDER, config.r_diag))
     kind = "com" if filter == "proposed" else "rosb"
     R_com = np.diag([r[c] for c in model.kinds[kind]])
     R_ahrs = np.diag([r[c] for c in model.kinds["ahrs"]])
     error, estimate, truth = np.zeros(n + 1), np.zeros((n + 1, 2)), np.zeros((n + 1, 2))
     estimate[0], truth[0] = x0[:2], (x, y)
     bias = 0.0
+    bias_rate = config.noise.bias_rate(noise)
 
     def command(k):
         s = ekf.x[:4] if config.steer_on_estimate else (x, y, psi, v)
@@ -459,8 +457,8 @@ def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filt
         v_old = v
         x, y, psi, v = vehicle_step(x, y, psi, v, omega, accel, dt, config.v_min_mps, config.v_max_mps)
         ekf.predict(k * dt)
-        bias += sig[3] * noise[k, 3]
-        ahrs = [psi + bias + sig[0] * noise[k, 0], omega + sig[1] * noise[k, 1], (v - v_old) / dt + sig[2] * noise[k, 2]]
+        bias = bias_step(bias, sig, noise, k, bias_rate, dt)
+        ahrs = list(imu_reading(psi, bias, omega, (v - v_old) / dt, sig, noise, k))
         if k % config.com_every == 0:
             d = math.hypot(x - config.beacon_xy[0], y - config.beacon_xy[1]) + sig[4] * noise[k, 4]
             vr = float(closing_speed(x, y, psi, v, config.beacon_xy)) + sig[5] * noise[k, 5]

@@ -66,6 +66,7 @@ from .geometry import local_to_geodetic, slant_to_horizontal
 from .logs import (LogWarning, depth_at, parse_pair as _pair, parse_position, read_columns, read_depth,
                    read_fixes, read_imu, read_measurements)
 from .models import Auv6Model
+from .paper import EQ25_R, eq25_q, eq25_r_text
 from .smoother import rts_smooth
 
 __all__ = ["MEASUREMENT_COLUMNS", "IMU_COLUMNS", "FILTERS", "SMOOTHERS", "RANGE_FLOOR_M", "V_R_FLOOR_MPS",
@@ -88,8 +89,6 @@ FRAME_STATUS = {0: "not_used", 1: "accepted", 2: "gated", 3: "accepted_after_gat
 #: χ² with 2 degrees of freedom at 95 %: the error ellipse that should hold the truth 95 % of the time.
 CHI2_2DOF_95 = 5.991464547107979
 
-#: Paper 000 eq 25, by component.
-EQ25_R = {"range": 12.0, "v_r": 0.2, "psi": 1.0, "omega": 0.005, "a": 0.005}
 
 
 def _warn(message: str) -> None:
@@ -214,7 +213,7 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
                          "status": np.where(inside, FRAME_STATUS[1], FRAME_STATUS[-1]), "nis": np.full(n, np.nan),
                          "sigma_range_m": sr, "sigma_v_r_mps": sv if filter == "proposed" else np.full(n, np.nan)}
         out["settings"] = {"filter": filter, "description": "paper 000 6-state EKF, Q = Δt⁸ I6, R = "
-                           + ("records' σ" if r_from_records else "eq 25 (12 m², 0.2 m²/s², 1, 0.005, 0.005)")
+                           + ("records' σ" if r_from_records else f"eq 25 {eq25_r_text()}")
                            + " (paper-faithful)", "smoother": "rts" if smooth else None,
                            "r_from_records": bool(r_from_records), "depths_m": list(depths) if depths else None}
         return out
@@ -366,7 +365,7 @@ def _paper_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=
     ranges = meas["range_m"] if depths is None else slant_to_horizontal(meas["range_m"], *depths)
     model = Auv6Model(beacon_xy)
     x0 = [start_xy[0], start_xy[1], imu["heading_rad"][0], start_speed_mps, 0.0, 0.0]
-    ekf = ExtendedKalmanFilter(model, x0, np.eye(6), lambda dt: dt**8 * np.eye(6), t0_s=float(imu["t_s"][0]))
+    ekf = ExtendedKalmanFilter(model, x0, np.eye(6), lambda dt: eq25_q(dt) * np.eye(6), t0_s=float(imu["t_s"][0]))
     # Events in time order; at equal times the IMU sample comes first (kind 0 < 1).
     times = np.r_[imu["t_s"], meas["t_arrival_s"]]
     kinds = np.r_[np.zeros(imu["t_s"].size, int), np.ones(ranges.size, int)]
