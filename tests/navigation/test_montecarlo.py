@@ -100,3 +100,25 @@ def test_paper_filter_tuning_is_eq25_as_printed():
     noise = NoiseModel()
     assert (noise.sigma_range_m**2, noise.sigma_vr_mps**2, noise.sigma_omega_rad_s**2,
             noise.sigma_accel_mps2**2) == pytest.approx((12.0, 0.2, 0.005, 0.005), rel=1e-15)
+
+
+def test_kernel_equals_python_reference_with_a_drifting_bias():
+    """The drift rate reaches the reference too (one IMU model): the reference once left it out."""
+    from dataclasses import replace
+
+    from seamodem.navigation.montecarlo import NoiseModel
+
+    config = MissionConfig(tcom_s=3.0, steer_on_estimate=False, path=SHORT_PATH,
+                           noise=NoiseModel(heading_bias_model="drift", heading_drift_deg_per_h=500.0))
+    reference, _ = config.reference()
+    noise = mission_noise(7, 0, reference.shape[0] - 1)
+    assert abs(config.noise.bias_rate(noise)) > 0
+    fast = simulate_mission(config, noise, reference=reference)
+    slow = simulate_mission_reference(config, noise, reference=reference)
+    # as in test_kernel_equals_python_reference: rounding only
+    for a, b in zip(fast, slow):
+        np.testing.assert_allclose(a, b, atol=1e-6)
+    # and the drift matters: without it the track differs by far more than that
+    still = simulate_mission(replace(config, noise=replace(config.noise, heading_drift_deg_per_h=0.0)), noise,
+                             reference=reference)
+    assert np.max(np.abs(still[1] - fast[1])) > 1e-3
