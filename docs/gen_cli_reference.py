@@ -44,6 +44,12 @@ def _default(action: argparse.Action) -> str:
     return f"`{value}`"
 
 
+def _metavar(action: argparse.Action) -> str:
+    """The value's name as ``--help`` prints it: a tuple metavar (``nargs=2``) as its words, not a Python tuple."""
+    metavar = action.metavar or action.dest.upper()
+    return " ".join(metavar) if isinstance(metavar, tuple) else metavar
+
+
 def _argument(action: argparse.Action) -> str:
     if action.option_strings:
         names = ", ".join(f"`{s}`" for s in action.option_strings)
@@ -53,7 +59,7 @@ def _argument(action: argparse.Action) -> str:
         return names
     if action.choices and not action.option_strings:
         return names
-    value = "{" + ",".join(map(str, action.choices)) + "}" if action.choices else (action.metavar or action.dest.upper())
+    value = "{" + ",".join(map(str, action.choices)) + "}" if action.choices else _metavar(action)
     if action.nargs in ("+", "*"):
         value += " …"
     return f"{names} {value}" if action.option_strings else names
@@ -68,7 +74,7 @@ def _usage(path: str, parser: argparse.ArgumentParser) -> str:
         elif not action.option_strings:
             parts.append(action.metavar or action.dest)
         elif action.required:
-            parts.append(f"{action.option_strings[-1]} {action.metavar or action.dest.upper()}")
+            parts.append(f"{action.option_strings[-1]} {_metavar(action)}")
     if any(a.option_strings and not a.required and a.help != argparse.SUPPRESS for a in parser._actions
            if not isinstance(a, argparse._HelpAction)):
         parts.append("[options]")

@@ -493,7 +493,8 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         tr = tracks[("waveform", f)]
         _write_csv(out / f"track_{f}.csv", {"t_s": tr["t_s"], "x_m": tr["xy_m"][:, 0], "y_m": tr["xy_m"][:, 1],
                                              "error_m": tr["error_m"]})
-    files += ["demo_config.json", "measurements.csv", "imu.csv", "truth.csv"] + [f"track_{f}.csv" for f in FILTERS]
+    files += ["demo_config.json", "measurements.csv", "measurements.csv.json", "imu.csv", "truth.csv"]
+    files += [f"track_{f}.csv" for f in FILTERS]
     if plots:
         plot_map(out / "map.png", cfg, vehicle, tracks, summary)
         plot_errors(out / "errors.png", tracks, errs)

@@ -38,7 +38,7 @@ from .._version import __version__
 from ..config import FrameConfig
 from ..errors import ConfigError, SeamodemError
 from ..io.blocks import BlockStats, read_blocks
-from ..io.files import atomic_outputs, check_writable
+from ..io.files import check_writable
 from ..io.wav import wav_channel
 from ..receive.detect import DETECTION_CONTEXT_S
 from ..receive.measure import NOISE_GAP_S, NOISE_WINDOW_S, frame_span_s
@@ -450,8 +450,7 @@ def decode_files(
     if output is not None:
         head = {"created_by": f"seamodem {__version__}", **(header or {})}
         head["recordings"] = [str(r.path) for r in recs]
-        with atomic_outputs(output) as (tmp,):
-            write_measurements(tmp, records, head, kind=output.suffix.lower().lstrip("."))
+        write_measurements(output, records, head)  # with its sidecar, both atomic
         if not failures:
             shutil.rmtree(folder, ignore_errors=True)
     return BatchResult(records, failures, notes, len(parts), n_resumed)

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import shlex
 import sys
+import warnings
 
 from pathlib import Path
 
@@ -13,7 +15,7 @@ from ..config import FrameConfig, get_preset, load_config
 from ..errors import SeamodemError
 from ..io.files import check_writable
 
-__all__ = ["add_config_options", "config_from_args", "command_line", "output_path"]
+__all__ = ["add_config_options", "config_from_args", "command_line", "output_path", "reported_warnings"]
 
 
 def add_config_options(parser: argparse.ArgumentParser) -> None:
@@ -72,3 +74,36 @@ def output_path(path: str | Path, suffix: str) -> Path:
     if out.suffix.lower() != suffix:
         raise SeamodemError(f"output: must be a {suffix} path, got {str(out)!r}")
     return check_writable(out)
+
+
+#: warnings meant for developers, not for the user of a command
+_DEVELOPER_WARNINGS = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+
+
+@contextlib.contextmanager
+def reported_warnings(command: str):
+    """Catch every warning raised inside; on leaving (also by an error), print each once, one line, on stderr.
+
+    A warning's first line is printed as ``seamodem COMMAND: warning: ...``;
+    the same message raised twice (a header read by two stages) is printed
+    once. Developer warnings (deprecations, resources) go on to Python's own handler.
+
+    Yields
+    ------
+    list of warnings.WarningMessage
+        What has been caught so far.
+    """
+    caught: list = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            yield caught
+    finally:
+        lines = []
+        for w in caught:
+            if issubclass(w.category, _DEVELOPER_WARNINGS):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            else:
+                lines.append(str(w.message).splitlines()[0] if str(w.message) else w.category.__name__)
+        for line in dict.fromkeys(lines):
+            print(f"seamodem {command}: warning: {line}", file=sys.stderr)

@@ -11,7 +11,7 @@ from pathlib import Path
 from .._progress import progress_bar
 from ..errors import SeamodemError
 from ..io.files import atomic_outputs
-from ._common import command_line
+from ._common import command_line, reported_warnings
 
 TABLE_COLUMNS = ("tcom_s", "filter", "mean_error_m", "error_variance_m2", "etd_max_pct", "etd_mean_pct", "outliers",
                  "diverged", "median_error_m")
@@ -206,12 +206,8 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 def run_track(args: argparse.Namespace) -> int:
     import math
-    import sys
-    import warnings
 
-    from ..navigation.geometry import CoordinateWarning
     from ..navigation.inertial import InertialConfig
-    from ..navigation.logs import LogWarning
     from ..navigation.track import track_from_files
 
     overrides = {}
@@ -225,40 +221,32 @@ def run_track(args: argparse.Namespace) -> int:
     for state in args.estimate:
         overrides["estimate_" + state.replace("-", "_")] = True
     smooth = "batch" if args.smooth else ("fixed-lag" if args.fixed_lag is not None else None)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            summary = track_from_files(
-                args.measurements,
-                args.imu,
-                beacon=args.beacon,
-                start=args.start,
-                start_speed_mps=args.start_speed,
-                start_sigma_m=args.start_sigma,
-                geodetic=args.geodetic,
-                depths=args.depth,
-                depth_log=args.depth_log,
-                beacon_depth_m=args.beacon_depth,
-                fixes=args.fixes,
-                filter=args.filter,
-                r_from_records=args.r_from_records,
-                smooth=smooth,
-                lag_s=args.fixed_lag,
-                config=InertialConfig(**overrides),
-                range_floor_m=args.range_floor,
-                v_r_floor_mps=args.vr_floor,
-                sigma_range_m=args.sigma_range,
-                sigma_v_r_mps=args.sigma_vr,
-                truth=args.truth,
-                command=command_line(),
-                output=args.output,
-            )
-        finally:
-            # what the readers repaired: one line each on stderr (also when the run then fails)
-            for w in caught:
-                if issubclass(w.category, (LogWarning, CoordinateWarning)):
-                    print(f"seamodem nav track: warning: {str(w.message).splitlines()[0]}", file=sys.stderr)
-                else:
-                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    # what the readers repaired: one line each on stderr (also when the run then fails)
+    with reported_warnings("nav track"):
+        summary = track_from_files(
+            args.measurements,
+            args.imu,
+            beacon=args.beacon,
+            start=args.start,
+            start_speed_mps=args.start_speed,
+            start_sigma_m=args.start_sigma,
+            geodetic=args.geodetic,
+            depths=args.depth,
+            depth_log=args.depth_log,
+            beacon_depth_m=args.beacon_depth,
+            fixes=args.fixes,
+            filter=args.filter,
+            r_from_records=args.r_from_records,
+            smooth=smooth,
+            lag_s=args.fixed_lag,
+            config=InertialConfig(**overrides),
+            range_floor_m=args.range_floor,
+            v_r_floor_mps=args.vr_floor,
+            sigma_range_m=args.sigma_range,
+            sigma_v_r_mps=args.sigma_vr,
+            truth=args.truth,
+            command=command_line(),
+            output=args.output,
+        )
     print(summary)
     return 0

@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ..errors import InputFileError, SeamodemError
-from ..io.files import atomic_outputs, check_writable
-from ._common import add_config_options, command_line, config_from_args
+from ..io.files import check_writable
+from ._common import add_config_options, command_line, config_from_args, reported_warnings
 
 DEFAULT_SOUND_SPEED_MPS = 1500.0
 #: the options that make ``seamodem rx`` a batch decode even for one recording
@@ -56,7 +56,7 @@ def add_parser(sub) -> None:
         metavar="S",
         help="two-way ranging: the beacon's reply delay [s]; emission times are then the vehicle's polls",
     )
-    p.add_argument("--channel", type=int, help="channel of a multichannel recording (0-based)")
+    p.add_argument("--channel", type=int, help="channel of a multichannel recording, numbered from 0")
     p.add_argument("--v-max", type=float, default=5.0, metavar="M/S", help="largest |v_r| searched (default 5 m/s)")
     p.add_argument(
         "--false-alarms-per-hour",
@@ -78,7 +78,7 @@ def add_parser(sub) -> None:
         metavar="N",
         help="most equaliser passes per frame; turbo passes run while the CRC fails (default 3; 1 = DFE only)",
     )
-    p.add_argument("--plot", metavar="DIR", help="write figures of the first --plot-frames frames to DIR")
+    p.add_argument("--plot", metavar="DIR", help="write figures of the first --plot-frames frames to DIR (created)")
     p.add_argument("--plot-frames", type=int, default=3, metavar="N", help="frames to plot (default 3)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     _add_batch_options(p)
@@ -270,23 +270,22 @@ def run(args: argparse.Namespace) -> int:
         raise SeamodemError(f"workers: must be >= 1, got {args.workers}")
     if args.turbo_passes < 1:
         raise SeamodemError(f"turbo-passes: must be >= 1, got {args.turbo_passes}")
-    if args.plot and not Path(args.plot).is_dir():
-        raise SeamodemError(f"plot: folder {args.plot} does not exist")
+    if args.plot and Path(args.plot).exists() and not Path(args.plot).is_dir():
+        raise SeamodemError(f"plot: {args.plot} exists and is not a folder")
     return (_run_many if batch else _run_one)(args, out)
 
 
 def _run_one(args: argparse.Namespace, out: Path) -> int:
     """One recording, streamed: records are written as frames are found."""
-    inputs = _inputs(args, args.recording[0])  # before the receiver's imports: a bad input fails at once
+    with reported_warnings("rx"):
+        inputs = _inputs(args, args.recording[0])  # before the receiver's imports: a bad input fails at once
 
-    from ..receive.recording import receive_file
-    from ..receive.records import write_measurements
-    from ..receive.stream import ReceiverWarning
+        from ..receive.recording import receive_file
+        from ..receive.records import write_measurements
 
-    on_frame = _plotter(args, inputs) if args.plot else None
-    header = _header(args, [inputs], batch=False)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ReceiverWarning)
+        if args.plot:
+            Path(args.plot).mkdir(parents=True, exist_ok=True)
+        on_frame = _plotter(args, inputs) if args.plot else None
         records = receive_file(
             inputs.path,
             inputs.config,
@@ -298,14 +297,13 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
             on_frame=on_frame,
             progress=False if args.quiet else None,
         )
-        with atomic_outputs(out) as (tmp,):
-            counted = _Counted(records)
-            n = write_measurements(tmp, counted, header, kind=out.suffix.lower().lstrip("."))
-    for w in caught:
-        if issubclass(w.category, ReceiverWarning):
-            print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
+        counted = _Counted(records)
+        n = write_measurements(out, counted, _header(args, [inputs], batch=False))
+        _warn_unmatched(counted.unmatched)
     if not args.quiet:
-        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {inputs.settings.sound_speed_mps:g} m/s)")
+        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {inputs.settings.sound_speed_mps:g} m/s)"
+              + (f"; {len(counted.unmatched)} arrival(s) before the first emission not written"
+                 if counted.unmatched else ""))
         if args.decode and counted.decoded:
             line = f"payloads: {counted.crc_ok} of {counted.decoded} decoded frames pass the CRC"
             if counted.ber_frames:
@@ -314,19 +312,36 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
     return 0
 
 
+def _warn_unmatched(times_s: list[float]) -> None:
+    """One warning for the arrivals no emission precedes (left out of the file: they have no range)."""
+    if times_s:
+        listed = ", ".join(f"{round(t, 3) + 0.0:.3f}" for t in times_s[:3]) + (" ..." if len(times_s) > 3 else "")
+        warnings.warn(
+            f"{len(times_s)} arrival(s) before the first emission (at t = {listed} s) have no emission time and so "
+            "no range: not written (listed in the sidecar's unmatched_arrivals_s; check --emit-start or "
+            "--clock-offset)",
+            UserWarning,
+            stacklevel=2,
+        )
+
+
 def _run_many(args: argparse.Namespace, out: Path) -> int:
     """Several or long recordings, in parallel; 0 when all succeeded, 1 when any failed."""
     from ..batch.decode import PartFailure, Recording, decode_files
+    from ..receive.records import is_matched
 
     recordings, failures, inputs = [], [], []
-    for path in args.recording:
-        try:
-            one = _inputs(args, path)
-        except SeamodemError as exc:
-            failures.append(PartFailure(str(path), str(exc)))
-            continue
-        inputs.append(one)
-        recordings.append(Recording(path, one.config, one.emissions, args.channel, one.settings, one.pilot, one.payloads))
+    with reported_warnings("rx"):
+        for path in args.recording:
+            try:
+                one = _inputs(args, path)
+            except SeamodemError as exc:
+                failures.append(PartFailure(str(path), str(exc)))
+                continue
+            inputs.append(one)
+            recordings.append(
+                Recording(path, one.config, one.emissions, args.channel, one.settings, one.pilot, one.payloads)
+            )
     result = decode_files(
         recordings,
         segment_s=args.segment,
@@ -340,11 +355,14 @@ def _run_many(args: argparse.Namespace, out: Path) -> int:
         progress=False if args.quiet else None,
         failed=failures,
     )
-    for note in dict.fromkeys(result.warnings):
-        print(f"seamodem rx: warning: {note}", file=sys.stderr)
     for f in result.failures:
         print(f"seamodem rx: failed: {f.label}: {f.error}", file=sys.stderr)
-    n = len(result.records)
+    unmatched = [r.t_arrival_s for r in result.records if not is_matched(r)]
+    with reported_warnings("rx"):
+        for note in result.warnings:
+            warnings.warn(note, UserWarning, stacklevel=1)
+        _warn_unmatched(unmatched)
+    n = len(result.records) - len(unmatched)
     if not args.quiet:
         line = (
             f"wrote {out}: {n} frame{'s' if n != 1 else ''} from {len(recordings)} recording"
@@ -359,15 +377,25 @@ def _run_many(args: argparse.Namespace, out: Path) -> int:
 
 
 class _Counted:
-    """Pass records through, counting decoded frames, CRC passes and bit errors."""
+    """Pass the records through, counting decoded frames, CRC passes and bit errors of those an emission precedes.
+
+    The times of the arrivals without an emission (no range) are kept in ``unmatched``.
+    """
 
     def __init__(self, records):
         self.records = records
         self.decoded = self.crc_ok = self.ber_frames = 0
         self.ber_sum = 0.0
+        self.unmatched: list[float] = []
 
     def __iter__(self):
+        from ..receive.records import is_matched
+
         for rec in self.records:
+            if not is_matched(rec):
+                self.unmatched.append(rec.t_arrival_s)
+                yield rec  # left out of the file, and listed in its sidecar, by write_measurements
+                continue
             if rec.crc_ok is not None:
                 self.decoded += 1
                 self.crc_ok += int(rec.crc_ok)

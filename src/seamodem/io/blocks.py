@@ -3,12 +3,15 @@
 The receiver (:func:`~seamodem.receive.recording.receive_file`) and batch
 decoding (:func:`~seamodem.batch.decode.decode_part`) both read through
 :func:`read_blocks`, so a whole file and its segments see the same blocks and
-the same checks: NaN or infinite samples and truncation are errors; clipped and
-silent samples are counted in :class:`BlockStats`.
+the same checks: NaN or infinite samples and a read that stops short are
+errors; clipped and silent samples are counted in :class:`BlockStats`. A WAV
+whose header lies about its length is read as far as its samples go
+(:func:`~seamodem.io.wav.wav_info`, which reports it).
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,6 +21,7 @@ import soundfile
 
 from .._progress import progress_bar
 from ..errors import InputFileError
+from .wav import AudioInfo, RecordingWarning, open_audio, wav_info
 
 __all__ = ["BLOCK", "BlockStats", "clip_level", "read_blocks"]
 
@@ -50,6 +54,7 @@ def read_blocks(
     name: str | Path | None = None,
     block: int = BLOCK,
     progress: bool | None = False,
+    info: AudioInfo | None = None,
 ) -> Iterator[np.ndarray]:
     """Samples [start, stop) of one channel of ``path``, in blocks of ``block`` samples.
 
@@ -60,7 +65,7 @@ def read_blocks(
     channel : int
         0-based channel.
     start, stop : int
-        Sample range; ``stop`` is at most the header's frame count.
+        Sample range; ``stop`` is at most the samples present (``AudioInfo.frames``).
     counted : (int, int), optional
         Sample range over which clipping and silence are counted in ``stats``
         (default [start, stop); a segment counts only its own samples so that
@@ -71,6 +76,9 @@ def read_blocks(
         The recording as named in error messages (default ``path``).
     progress : bool, optional
         Progress bar (None: on a terminal).
+    info : AudioInfo, optional
+        The file's :func:`~seamodem.io.wav.wav_info`, when the caller has it
+        (and has reported its note); else read here, silently.
 
     Raises
     ------
@@ -80,7 +88,11 @@ def read_blocks(
     name = path if name is None else name
     lo, hi = (start, stop) if counted is None else counted
     stats = BlockStats() if stats is None else stats
-    with soundfile.SoundFile(str(path)) as f, progress_bar(
+    if info is None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RecordingWarning)  # the caller's wav_channel has reported it
+            info = wav_info(path)
+    with open_audio(path, info) as f, progress_bar(
         total=stop - start, desc="rx", unit="sample", unit_scale=True, enabled=progress
     ) as bar:
         level = clip_level(f.subtype)
@@ -95,8 +107,9 @@ def read_blocks(
             if data.shape[0] == 0:
                 raise InputFileError(f"recording {name} is truncated: it ends at sample {pos}, before {stop}")
             x = np.ascontiguousarray(data[:, channel])
-            if not np.all(np.isfinite(x)):
-                raise InputFileError(f"recording {name} contains NaN or infinite samples (near sample {pos})")
+            bad = np.flatnonzero(~np.isfinite(x))
+            if bad.size:
+                raise InputFileError(f"recording {name} contains NaN or infinite samples (first at sample {pos + bad[0]})")
             a, b = max(pos, lo) - pos, min(pos + len(x), hi) - pos
             if b > a:
                 stats.clipped += int(np.count_nonzero(np.abs(x[a:b]) >= level))

@@ -6,6 +6,9 @@ line reads :data:`SUBTYPES` for its help without waiting for either.
 
 from __future__ import annotations
 
+import contextlib
+import warnings
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterable
 
@@ -15,7 +18,8 @@ if TYPE_CHECKING:
 
 from ..errors import InputFileError
 
-__all__ = ["SUBTYPES", "write_wav_blocks", "read_wav", "wav_info", "wav_channel"]
+__all__ = ["SUBTYPES", "AudioInfo", "RecordingWarning", "open_audio", "write_wav_blocks", "read_wav", "wav_info",
+           "wav_channel"]
 
 #: CLI names of the sample formats → soundfile subtypes.
 SUBTYPES = {"float32": "FLOAT", "pcm16": "PCM_16", "pcm24": "PCM_24"}
@@ -38,34 +42,88 @@ def write_wav_blocks(path: str | Path, blocks: Iterable[np.ndarray], *, fs: int,
     return n
 
 
-def _check_riff_complete(path: Path) -> None:
-    """Raise if a RIFF/WAVE file's data chunk is shorter than its header says.
+#: bytes per sample of the PCM and float subtypes whose sample count follows from the data chunk's length
+_SAMPLE_BYTES = {"PCM_U8": 1, "PCM_S8": 1, "PCM_16": 2, "PCM_24": 3, "PCM_32": 4, "FLOAT": 4, "DOUBLE": 8}
 
-    libsndfile silently reads what is there; a cut recording must not pass for a whole one.
+
+class RecordingWarning(UserWarning):
+    """A recording that is read, but not as its header describes it (a crashed or streaming recorder)."""
+
+
+@dataclass(frozen=True)
+class AudioInfo:
+    """What a recording holds, as read: sample rate, channels, the samples actually present.
+
+    Attributes
+    ----------
+    samplerate : int
+        [Hz].
+    channels : int
+    frames : int
+        Samples per channel that can be read (fewer than the header says for a
+        cut file; the data present for a header that says 0).
+    subtype : str
+        soundfile subtype ("PCM_16", "FLOAT"...).
+    data_offset : int or None
+        Byte offset of the samples when they must be read past the header
+        (a data chunk declared 0 bytes long); None otherwise.
+    note : str or None
+        One line on how the header lied, None for a sound file.
     """
+
+    samplerate: int
+    channels: int
+    frames: int
+    subtype: str
+    data_offset: int | None = None
+    note: str | None = None
+
+    @property
+    def duration(self) -> float:
+        """[s]."""
+        return self.frames / self.samplerate
+
+
+def _riff_data_chunk(path: Path) -> tuple[int, int, int] | None:
+    """(offset of the samples, bytes the data chunk declares, bytes present) of a RIFF/WAVE file, else None."""
     size = path.stat().st_size
     with open(path, "rb") as f:
         head = f.read(12)
         if len(head) < 12 or head[:4] != b"RIFF" or head[8:12] != b"WAVE":
-            return
+            return None
         pos = 12
         while pos + 8 <= size:
             f.seek(pos)
             chunk = f.read(8)
             declared = int.from_bytes(chunk[4:8], "little")
             if chunk[:4] == b"data":
-                available = size - pos - 8
-                if available < declared:
-                    raise InputFileError(
-                        f"recording {path} is truncated: its data chunk declares {declared} bytes, "
-                        f"only {available} are present"
-                    )
-                return
+                return pos + 8, declared, size - pos - 8
             pos += 8 + declared + (declared & 1)
+    return None
 
 
-def wav_info(path: str | Path) -> soundfile._SoundFileInfo:
-    """Header of an audio file, with a one-line error for a missing, empty, truncated or unreadable file."""
+def _header_note(path: Path, declared: int, present: int, frames: int, width: int) -> str | None:
+    """One line on a data chunk whose declared length is not what the file holds; None when it is."""
+    if declared == 0xFFFFFFFF:
+        said = "an unknown length (0xFFFFFFFF, a streaming recorder's placeholder)"
+    elif declared == 0 and present:
+        said = "0 bytes (a recorder that never closed the file)"
+    elif declared > present:
+        said = f"{declared // width} samples"
+    else:
+        return None
+    cut = f"; the last {present % width} byte(s) are an incomplete sample" if present % width else ""
+    return f"recording {path}: the header says {said}, the file holds {frames} samples: reading those{cut}"
+
+
+def wav_info(path: str | Path) -> AudioInfo:
+    """What an audio file holds, with a one-line error for a missing, empty or unreadable file.
+
+    A WAV whose header lies about its length (0xFFFFFFFF or 0 from a streaming
+    or crashed recorder, or more bytes than the file holds) is read as far as
+    its samples go; :attr:`AudioInfo.note` says so, and a
+    :class:`RecordingWarning` carries it.
+    """
     import soundfile
 
     path = Path(path)
@@ -74,14 +132,68 @@ def wav_info(path: str | Path) -> soundfile._SoundFileInfo:
     if path.stat().st_size == 0:
         raise InputFileError(f"recording {path} is empty (0 bytes)")
     try:
-        info = soundfile.info(str(path))
+        sf = soundfile.info(str(path))
     except (soundfile.LibsndfileError, RuntimeError) as exc:
         raise InputFileError(f"recording {path} is not a readable audio file: {exc}") from None
-    _check_riff_complete(path)
+    info = AudioInfo(int(sf.samplerate), int(sf.channels), int(sf.frames), sf.subtype)
+    chunk = _riff_data_chunk(path) if sf.subtype in _SAMPLE_BYTES else None
+    if chunk is not None:
+        offset, declared, present = chunk
+        width = _SAMPLE_BYTES[sf.subtype] * info.channels
+        frames = present // width
+        # libsndfile reads what is there for a too-long header (it counts the samples itself), nothing for 0
+        info = replace(info, frames=min(info.frames, frames) if info.frames else frames,
+                       data_offset=offset if not info.frames and frames else None)
+        info = replace(info, note=_header_note(path, declared, present, info.frames, width))
+    if info.note:
+        warnings.warn(info.note, RecordingWarning, stacklevel=2)
     return info
 
 
-def wav_channel(path: str | Path, *, channel: int | None = None) -> tuple[soundfile._SoundFileInfo, int]:
+class _Window:
+    """The bytes of a file from ``offset`` on, as a file object (soundfile reads them as RAW samples)."""
+
+    def __init__(self, path: Path, offset: int, length: int):
+        self._f, self._offset, self._length = open(path, "rb"), offset, length
+        self._f.seek(offset)
+
+    def seek(self, pos: int, whence: int = 0) -> int:
+        base = (self._offset, self._f.tell(), self._offset + self._length)[whence]
+        return self._f.seek(base + pos) - self._offset
+
+    def tell(self) -> int:
+        return self._f.tell() - self._offset
+
+    def read(self, n: int = -1) -> bytes:
+        left = max(self._offset + self._length - self._f.tell(), 0)
+        return self._f.read(left if n < 0 else min(n, left))
+
+    def close(self) -> None:
+        self._f.close()
+
+
+@contextlib.contextmanager
+def open_audio(path: str | Path, info: AudioInfo | None = None):
+    """A :class:`soundfile.SoundFile` over the samples of ``path`` that :func:`wav_info` found, for reading."""
+    import soundfile
+
+    path = Path(path)
+    info = wav_info(path) if info is None else info
+    if info.data_offset is None:
+        with soundfile.SoundFile(str(path)) as f:
+            yield f
+        return
+    width = _SAMPLE_BYTES[info.subtype] * info.channels
+    window = _Window(path, info.data_offset, info.frames * width)
+    try:
+        with soundfile.SoundFile(window, samplerate=info.samplerate, channels=info.channels, subtype=info.subtype,
+                                 format="RAW", endian="LITTLE") as f:
+            yield f
+    finally:
+        window.close()
+
+
+def wav_channel(path: str | Path, *, channel: int | None = None) -> tuple[AudioInfo, int]:
     """Header of a recording that holds samples, and the channel to read (0 for mono).
 
     Raises
@@ -94,10 +206,15 @@ def wav_channel(path: str | Path, *, channel: int | None = None) -> tuple[soundf
     if info.frames == 0:
         raise InputFileError(f"recording {path} holds no samples")
     if info.channels > 1 and channel is None:
-        raise InputFileError(f"recording {path} has {info.channels} channels: choose one with --channel")
+        raise InputFileError(
+            f"recording {path} has {info.channels} channels: choose one with --channel (0 to {info.channels - 1})"
+        )
     ch = 0 if channel is None else int(channel)
     if not 0 <= ch < info.channels:
-        raise InputFileError(f"channel {ch} does not exist in {path} ({info.channels} channels)")
+        raise InputFileError(
+            f"channel {ch} does not exist in {path}: it has {info.channels} channel(s), numbered from 0 "
+            f"(0 to {info.channels - 1})"
+        )
     return info, ch
 
 
@@ -127,12 +244,14 @@ def read_wav(path: str | Path, *, channel: int | None = None) -> tuple[np.ndarra
 
     info, ch = wav_channel(path, channel=channel)
     try:
-        data, fs = soundfile.read(str(path), dtype="float64", always_2d=True)
+        with open_audio(path, info) as f:
+            data = f.read(info.frames, dtype="float64", always_2d=True)
     except (soundfile.LibsndfileError, RuntimeError) as exc:
-        raise InputFileError(f"recording {path} is truncated or corrupt: {exc}") from None
+        raise InputFileError(f"recording {path} is corrupt: {exc}") from None
     if data.shape[0] < info.frames:
-        raise InputFileError(f"recording {path} is truncated: header says {info.frames} samples, read {data.shape[0]}")
+        raise InputFileError(f"recording {path} is truncated: it holds {info.frames} samples, read {data.shape[0]}")
     x = np.ascontiguousarray(data[:, ch])
-    if not np.all(np.isfinite(x)):
-        raise InputFileError(f"recording {path} contains NaN or infinite samples")
-    return x, int(fs)
+    bad = np.flatnonzero(~np.isfinite(x))
+    if bad.size:
+        raise InputFileError(f"recording {path} contains NaN or infinite samples (first at sample {bad[0]})")
+    return x, info.samplerate

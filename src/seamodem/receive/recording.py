@@ -60,10 +60,14 @@ def receive_file(
     Raises
     ------
     InputFileError
-        Missing, empty, non-audio, truncated or NaN-bearing file; bad channel.
+        Missing, empty or non-audio file, NaN or infinite samples; bad channel.
 
     Warns
     -----
+    RecordingWarning
+        A header that lies about the length (a crashed or streaming recorder):
+        the samples present are processed; a frame cut by the end is
+        recorded undecoded.
     ReceiverWarning
         Silent or clipped recording; no frame found.
     """
@@ -71,7 +75,7 @@ def receive_file(
     info, ch = wav_channel(path, channel=channel)
     rx = Receiver(config, emissions=emissions, settings=settings, pilot=pilot, payloads=payloads, on_frame=on_frame)
     stats = BlockStats()
-    blocks = read_blocks(path, channel=ch, stop=info.frames, stats=stats, progress=progress)
+    blocks = read_blocks(path, channel=ch, stop=info.frames, stats=stats, progress=progress, info=info)
     n = 0
     for rec in rx.run(blocks, fs=info.samplerate):
         n += 1

@@ -7,26 +7,49 @@ first (direct) path; ``tof_s = t_arrival_s − t_emit_s − clock_offset_s``
 §III.B, with ``t_emit_s`` the vehicle's poll emission); ``range_m = c·tof_s``
 (slant range); v_r positive when closing, the mean over the frame.
 
-Both files start with a header that records the format, the sound speed, the
-clock offset or turnaround and the frame configuration: CSV as ``#`` comment
-lines, JSON Lines as a first object with ``"format"``.
+The files are plain tables, one header row then one row per frame, so that
+``pandas.read_csv(path)`` and ``pandas.read_json(path, lines=True)`` open them
+as they are. What describes the run (format, command, sound speed, clock
+offset or turnaround, frame configuration) goes in a JSON sidecar beside the
+file, ``MEAS.csv.json`` (:func:`measurement_sidecar_path`). Files of format
+``seamodem.measurements/1``, which carried that header inside (CSV ``#``
+lines, a first JSON Lines object), are still read.
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import json
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, NamedTuple
 
 from ..errors import InputFileError, SeamodemError
+from ..io.files import atomic_outputs
 
-__all__ = ["MeasurementRecord", "MEASUREMENT_FORMAT", "write_measurements", "read_measurements"]
+__all__ = [
+    "MeasurementRecord",
+    "MEASUREMENT_FORMAT",
+    "MeasurementFileWarning",
+    "Measurements",
+    "is_matched",
+    "measurement_sidecar_path",
+    "write_measurements",
+    "read_measurements",
+]
 
-MEASUREMENT_FORMAT = "seamodem.measurements/1"
+#: format of the sidecar of a plain measurement file
+MEASUREMENT_FORMAT = "seamodem.measurements/2"
+#: the earlier format, with its header inside the file
+MEASUREMENT_FORMAT_V1 = "seamodem.measurements/1"
+
+
+class MeasurementFileWarning(UserWarning):
+    """A measurement file that was read, but without the metadata it should have (no sidecar)."""
 
 
 @dataclass(frozen=True)
@@ -122,9 +145,28 @@ class MeasurementRecord:
 
 
 FIELDS = tuple(f.name for f in dataclasses.fields(MeasurementRecord))
-#: columns a file may lack (measured without decoding, or written before decoding existed)
-OPTIONAL_FIELDS = ("crc_ok", "payload_hex", "payload_text", "eq_snr_db", "decode_passes", "ber", "raw_ber", "source")
+#: columns every file seamodem writes has: SPEC §4's required ones and the receiver's estimates ...
+CORE_FIELDS = ("frame_index", "t_emit_s", "t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db", "v_r_tone_eq9_mps",
+               "v_r_bank_mps", "detection_z", "detection_rho", "sigma_range_m", "sigma_v_r_mps",
+               "sigma_v_r_bank_mps", "tone_c_n0_dbhz")
+#: ... and the others, which a file may lack (measured without decoding, or written before the column existed)
+OPTIONAL_FIELDS = tuple(f for f in FIELDS if f not in CORE_FIELDS)
 _TYPES = {f.name: f.type for f in dataclasses.fields(MeasurementRecord)}
+
+
+def measurement_sidecar_path(path: str | Path) -> Path:
+    """The metadata sidecar of a measurement file: ``MEAS.csv`` → ``MEAS.csv.json``.
+
+    The whole file name is kept, so that ``MEAS.csv`` and ``MEAS.jsonl`` have
+    their own sidecars and neither replaces a recording's ``MEAS.json``.
+    """
+    path = Path(path)
+    return path.with_name(path.name + ".json")
+
+
+def is_matched(rec: MeasurementRecord) -> bool:
+    """Whether a record has an emission (a frame index ≥ 0 and a finite ``t_emit_s``), hence a range."""
+    return rec.frame_index >= 0 and math.isfinite(rec.t_emit_s)
 
 
 def _format(path: Path) -> str:
@@ -142,97 +184,194 @@ def _json_value(value):
     return value
 
 
+def _csv_row(rec: MeasurementRecord) -> dict[str, Any]:
+    row = rec.to_dict()
+    row["crc_ok"] = "" if rec.crc_ok is None else int(rec.crc_ok)
+    row["two_way"] = int(rec.two_way)
+    return {k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()}
+
+
 def write_measurements(
     path: str | Path, records: Iterable[MeasurementRecord], header: dict[str, Any], *, kind: str | None = None
 ) -> int:
-    """Write records to ``path`` (.csv or .jsonl) as they come; returns how many.
+    """Write the records to ``path`` (.csv or .jsonl) as they come, the metadata to its sidecar; returns how many.
 
     Parameters
     ----------
+    path : str or Path
+        The measurement file; its sidecar is :func:`measurement_sidecar_path`.
+    records : iterable of MeasurementRecord
+        Written one row each as they come (a streaming receiver's records
+        reach the disk as frames are found).
     header : dict
-        Run description (sound speed, clock offset, configuration...), written
-        first with ``format`` added.
+        Run description (command, sound speed, clock offset, configuration...),
+        written to the sidecar with ``format``, ``file``, ``columns`` and
+        ``rows`` added.
     kind : {"csv", "jsonl"}, optional
         File format; default from the suffix of ``path``.
 
     Notes
     -----
-    The caller wraps this in :func:`seamodem.io.files.atomic_outputs` so that a
-    failed run leaves no partial file.
+    Every row written is usable downstream: an arrival that no emission
+    precedes (``frame_index`` −1, no ``t_emit_s``, so no range) is not a
+    measurement and is left out; the sidecar lists such arrivals' times as
+    ``unmatched_arrivals_s``. The file and its sidecar appear together when
+    all records are written, or not at all
+    (:func:`seamodem.io.files.atomic_outputs`).
+
+    CSV: one header row, then one row per record; floats as Python's
+    ``repr`` (shortest round-trip text, ``nan`` when unknown); ``crc_ok`` 1, 0
+    or empty (not decoded); text quoted when it holds a comma, a quote or a
+    line break. JSON Lines: one object per record, ``null`` when unknown.
     """
     path = Path(path)
     kind = kind or _format(path)
-    head = {"format": MEASUREMENT_FORMAT, **header}
-    n = 0
-    with path.open("w", encoding="utf-8", newline="") as f:
-        if kind == "csv":
-            for key, value in head.items():
-                f.write(f"# {key}: {json.dumps(value)}\n")
-            writer = csv.DictWriter(f, fieldnames=FIELDS)
-            writer.writeheader()
+    sidecar = measurement_sidecar_path(path)
+    n, unmatched = 0, []
+    with atomic_outputs(path, sidecar) as (tmp, tmp_sidecar):
+        with tmp.open("w", encoding="utf-8", newline="") as f:
+            writer = None
+            if kind == "csv":
+                writer = csv.DictWriter(f, fieldnames=FIELDS)
+                writer.writeheader()
             for rec in records:
-                row = rec.to_dict()
-                row["crc_ok"] = "" if rec.crc_ok is None else int(rec.crc_ok)
-                row["two_way"] = int(rec.two_way)
-                writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()})
+                if not is_matched(rec):
+                    unmatched.append(rec.t_arrival_s)
+                    continue
+                if writer is not None:
+                    writer.writerow(_csv_row(rec))
+                else:
+                    f.write(json.dumps({k: _json_value(v) for k, v in rec.to_dict().items()}) + "\n")
                 f.flush()
                 n += 1
-        else:
-            f.write(json.dumps(head) + "\n")
-            for rec in records:
-                f.write(json.dumps({k: _json_value(v) for k, v in rec.to_dict().items()}) + "\n")
-                f.flush()
-                n += 1
+        meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **header, "columns": list(FIELDS), "rows": n,
+                "unmatched_arrivals_s": unmatched}
+        tmp_sidecar.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return n
 
 
 def _parse(name: str, value):
     kind = _TYPES[name]
     if kind == "str":
-        return "" if value is None else str(value)
+        return "" if value is None or (isinstance(value, float) and math.isnan(value)) else str(value)
     if value is None or value == "":
         return None if "None" in kind else math.nan
     if kind == "int":
-        return int(value)
+        return int(float(value))
     if "bool" in kind:
-        return bool(int(value)) if isinstance(value, str) else bool(value)
+        if isinstance(value, str):
+            text = value.strip().lower()
+            if text in ("true", "false"):
+                return text == "true"
+            return bool(float(text))
+        return bool(value)
     return float(value)
 
 
-def read_measurements(path: str | Path) -> tuple[list[MeasurementRecord], dict[str, Any]]:
-    """Read a file written by :func:`write_measurements`: (records, header).
+class Measurements(NamedTuple):
+    """What :func:`read_measurements` returns: the records and the run's metadata.
+
+    Unpacks as ``records, metadata = read_measurements(path)``.
+    """
+
+    records: list[MeasurementRecord]
+    metadata: dict[str, Any]
+
+    def columns(self) -> dict[str, list]:
+        """The records column by column, e.g. for ``pandas.DataFrame(m.columns())``."""
+        return {name: [getattr(r, name) for r in self.records] for name in FIELDS}
+
+
+def _read_csv(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """(inline header of a format-1 file or {}, rows) of a CSV measurement file."""
+    header: dict[str, Any] = {}
+    # newline="": a payload_text with a line break is one quoted field, kept as written
+    with path.open(encoding="utf-8-sig", newline="") as f:
+        text = f.read()
+    pos = 0
+    while text.startswith("# ", pos):  # format 1: '# key: json' lines before the header row
+        end = text.find("\n", pos)
+        end = len(text) if end < 0 else end + 1
+        key, _, value = text[pos + 2 : end].strip().partition(": ")
+        try:
+            header[key] = json.loads(value)
+        except json.JSONDecodeError:
+            raise InputFileError(f"{path}: header line {key!r} is not valid JSON") from None
+        pos = end
+    return header, list(csv.DictReader(io.StringIO(text[pos:], newline="")))
+
+
+def _read_jsonl(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """(inline header of a format-1 file or {}, rows) of a JSON Lines measurement file."""
+    with path.open(encoding="utf-8-sig", newline="") as f:
+        lines = [line for line in f.read().split("\n") if line.strip()]
+    rows = []
+    for i, line in enumerate(lines):
+        try:
+            rows.append(json.loads(line))
+        except json.JSONDecodeError as exc:
+            raise InputFileError(f"{path}: line {i + 1} is not valid JSON ({exc.msg})") from None
+        if not isinstance(rows[-1], dict):
+            raise InputFileError(f"{path}: line {i + 1} is not a JSON object")
+    header = {}
+    if rows and "format" in rows[0] and "frame_index" not in rows[0]:
+        header = rows.pop(0)
+    return header, rows
+
+
+def read_measurements(path: str | Path) -> Measurements:
+    """Read a measurement file: its records and the metadata of its sidecar.
+
+    Parameters
+    ----------
+    path : str or Path
+        A .csv or .jsonl file written by :func:`write_measurements` (or by an
+        earlier version, with the header inside the file), or any table with
+        the record's columns.
+
+    Returns
+    -------
+    Measurements
+        ``(records, metadata)``; ``metadata`` is the sidecar (``format``,
+        ``created_by``, ``sound_speed_mps``, ``config``...), or the header of a
+        format-1 file, or ``{}``.
 
     Raises
     ------
     InputFileError
-        Missing file, unknown format, a row with missing columns.
+        Missing file, unknown format, a sidecar that is not JSON or of another
+        format, a row with missing columns or a value that is not a number.
+
+    Warns
+    -----
+    MeasurementFileWarning
+        No sidecar and no header in the file: the rows are read, the metadata is empty.
     """
     path = Path(path)
     if not path.is_file():
         raise InputFileError(f"measurement file not found: {path}")
     kind = _format(path)
-    lines = path.read_text(encoding="utf-8").splitlines()
-    header: dict[str, Any] = {}
-    rows: list[dict[str, Any]] = []
-    if kind == "csv":
-        body = []
-        for line in lines:
-            if line.startswith("# "):
-                key, _, value = line[2:].partition(": ")
-                header[key] = json.loads(value)
-            else:
-                body.append(line)
-        rows = list(csv.DictReader(body))
-    else:
-        if lines:
-            header = json.loads(lines[0])
-        rows = [json.loads(line) for line in lines[1:] if line.strip()]
-    if header.get("format") != MEASUREMENT_FORMAT:
-        raise InputFileError(f"{path} is not a seamodem measurement file ({MEASUREMENT_FORMAT!r} expected)")
+    header, rows = _read_csv(path) if kind == "csv" else _read_jsonl(path)
+    sidecar = measurement_sidecar_path(path)
+    if not header and sidecar.is_file():
+        try:
+            header = json.loads(sidecar.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise InputFileError(f"measurement sidecar {sidecar} is not valid JSON: {exc}") from None
+        if not isinstance(header, dict) or header.get("format") != MEASUREMENT_FORMAT:
+            raise InputFileError(f"{sidecar} is not a seamodem measurement sidecar ({MEASUREMENT_FORMAT!r} expected)")
+    elif not header:
+        warnings.warn(f"{path} has no sidecar ({sidecar.name}): rows read without the run's metadata",
+                      MeasurementFileWarning, stacklevel=2)
+    elif header.get("format") != MEASUREMENT_FORMAT_V1:
+        raise InputFileError(f"{path} is not a seamodem measurement file ({MEASUREMENT_FORMAT_V1!r} header expected)")
     records = []
     for i, row in enumerate(rows):
         missing = [k for k in FIELDS if k not in row and k not in OPTIONAL_FIELDS]
         if missing:
             raise InputFileError(f"{path}: row {i + 1} lacks {', '.join(missing)}")
-        records.append(MeasurementRecord(**{k: _parse(k, row[k]) for k in FIELDS if k in row}))
-    return records, header
+        try:
+            records.append(MeasurementRecord(**{k: _parse(k, row[k]) for k in FIELDS if k in row}))
+        except (TypeError, ValueError) as exc:
+            raise InputFileError(f"{path}: row {i + 1}: a value is not of its column's type ({exc})") from None
+    return Measurements(records, header)
