@@ -83,6 +83,9 @@ def add_parser(sub) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     _add_batch_options(p)
     p.set_defaults(run=run)
+    from .rx_reference import add_reference_options  # --reference: ranging on other waveforms
+
+    add_reference_options(p)
 
 
 def _add_batch_options(p: argparse.ArgumentParser) -> None:

@@ -35,11 +35,26 @@ def add_parser(sub) -> None:
     p.add_argument("--format", choices=sorted(SUBTYPES), default="float32", help="WAV sample format (default float32)")
     p.add_argument("--peak", type=float, default=0.5, help="largest |sample| as a fraction of full scale (default 0.5)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.wav", help="output WAV; the sidecar is OUT.json")
+    ref = p.add_argument_group(
+        "reference waveforms (docs/references.md)",
+        "Instead of seamodem frames, emit known pings: reference i of n at START + k·PERIOD + i·PERIOD/n "
+        "(and its postamble, if it has one). The sidecar records the references and every emission.",
+    )
+    ref.add_argument(
+        "--reference",
+        action="append",
+        metavar="SPEC",
+        help="lfm:F1-F2:DURATION, hfm:F1-F2:DURATION, pn:CARRIER:CHIPRATE:DEGREE, template:FILE[:START-STOP], "
+        "or a TOML/JSON file (repeatable)",
+    )
+    ref.add_argument("--sample-rate", type=float, default=96000.0, metavar="HZ", help="WAV rate for references (default 96000)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.reference:
+        return _run_references(args)
     from ..transmit.beacon import BeaconSchedule, payloads_from_bytes, payloads_from_text, write_beacon
 
     out = output_path(args.output, ".wav")
@@ -70,5 +85,34 @@ def run(args: argparse.Namespace) -> int:
             f"wrote {out} ({count} frames of {config.frame_duration_s * 1e3:.1f} ms, {rec['duration_s']:.2f} s at "
             f"{rec['sample_rate_hz']} Hz, {args.format}) and {out.with_suffix('.json')}; "
             f"capacity {config.capacity_bytes} bytes/frame"
+        )
+    return 0
+
+
+def _run_references(args: argparse.Namespace) -> int:
+    """``--reference``: a beacon schedule of reference pings."""
+    from ..transmit.reference import load_references, reference_replica, write_reference_beacon
+
+    out = output_path(args.output, ".wav")
+    if args.payload_text or args.payload_file:
+        raise InputFileError("payload: reference pings carry no payload (drop --payload-text/--payload-file)")
+    refs = [r for spec in args.reference for r in load_references(spec)]
+    sidecar = write_reference_beacon(
+        out,
+        [reference_replica(r) for r in refs],
+        count=10 if args.count is None else args.count,
+        period_s=args.period,
+        start_s=args.start,
+        fs=args.sample_rate,
+        subtype=SUBTYPES[args.format],
+        peak=args.peak,
+        command=command_line(),
+    )
+    if not args.quiet:
+        rec = sidecar["recording"]
+        names = ", ".join(r.name for r in refs)
+        print(
+            f"wrote {out} ({len(sidecar['frames'])} emissions of {names}, {rec['duration_s']:.2f} s at "
+            f"{rec['sample_rate_hz']:g} Hz, {args.format}) and {out.with_suffix('.json')}"
         )
     return 0

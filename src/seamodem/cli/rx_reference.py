@@ -1,0 +1,216 @@
+"""``seamodem rx --reference SPEC``: range and Doppler on known pings (chirps, m-sequences, templates).
+
+Hooked into ``seamodem rx`` by :func:`add_reference_options`: with
+``--reference`` the command runs :func:`run_reference` instead of the frame
+receiver. Heavy imports stay inside the functions (fast command line).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+import warnings
+from pathlib import Path
+
+from ..errors import InputFileError, SeamodemError
+from ..io.files import check_writable
+from ._common import command_line
+
+__all__ = ["add_reference_options", "run_reference", "write_reference_records"]
+
+DEFAULT_SOUND_SPEED_MPS = 1500.0
+
+
+def add_reference_options(p: argparse.ArgumentParser) -> None:
+    """Add the reference options to ``seamodem rx`` and route ``--reference`` runs to :func:`run_reference`."""
+    g = p.add_argument_group(
+        "ranging on other waveforms (docs/references.md)",
+        "With --reference, RECORDING is searched for known pings instead of seamodem frames: each "
+        "occurrence gives one record (arrival, range, Doppler, SNR, σ's) naming the reference it matched. "
+        "Emission times: --emit-start/--emit-period, or the sidecar `seamodem tx --reference` wrote.",
+    )
+    g.add_argument(
+        "--reference",
+        action="append",
+        metavar="SPEC",
+        help="lfm:F1-F2:DURATION, hfm:F1-F2:DURATION, pn:CARRIER:CHIPRATE:DEGREE, template:FILE[:START-STOP], "
+        "a TOML/JSON file, or a reference sidecar (repeatable: several references in one recording)",
+    )
+    g.add_argument("--mat-variable", metavar="NAME", help=".mat recordings: the variable holding the samples")
+    g.add_argument("--sample-rate", type=float, metavar="HZ", help="sample rate when the file has none (.mat), or to override it")
+    g.add_argument(
+        "--all-channels",
+        action="store_true",
+        help="search every channel and keep, per detection, the channel with the highest E/N0",
+    )
+    frames_run = p.get_default("run")
+
+    def run(args: argparse.Namespace) -> int:
+        if args.reference:
+            return run_reference(args)
+        for name in ("mat_variable", "sample_rate", "all_channels"):
+            if getattr(args, name):
+                raise SeamodemError(f"{name.replace('_', '-')}: only with --reference (frame recordings are read as audio files)")
+        return frames_run(args)
+
+    p.set_defaults(run=run)
+
+
+def _emissions(args, sidecar: dict | None, references) -> dict:
+    """Emissions per reference name (None when unknown)."""
+    from ..receive.settings import Emissions
+
+    if args.emit_start is not None or args.emit_period is not None:
+        if args.emit_start is None or args.emit_period is None:
+            raise SeamodemError("emit-start: --emit-start and --emit-period go together")
+        e = Emissions(start_s=args.emit_start, period_s=args.emit_period)
+        return {r.name: e for r in references}
+    out = {}
+    for r in references:
+        times = [float(f["t_emit_s"]) for f in (sidecar or {}).get("frames", [])
+                 if f.get("reference") == r.name and f.get("role", "ping") != "postamble"]
+        out[r.name] = Emissions(times_s=times) if times else None
+    return out
+
+
+def _own_sidecar(recording: Path) -> dict | None:
+    from ..transmit.reference import REFERENCE_SIDECAR_FORMAT
+
+    path = recording.with_suffix(".json")
+    if not path.is_file() or path == recording:
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        return None
+    return data if isinstance(data, dict) and data.get("format") == REFERENCE_SIDECAR_FORMAT else None
+
+
+def write_reference_records(path: Path, records: list, metadata: dict) -> int:
+    """Plain CSV (one header row) or JSON Lines of the records, metadata in the sidecar ``PATH.json``.
+
+    Files appear together or not at all. Columns: every
+    :class:`~seamodem.receive.records.MeasurementRecord` column, then the
+    reference's own (:data:`~seamodem.receive.reference.REFERENCE_FIELDS`).
+    """
+    from ..io.files import atomic_outputs
+    from ..receive.records import MEASUREMENT_FORMAT
+    from ..receive.reference import REFERENCE_FIELDS
+
+    def value(v, csv_: bool):
+        if isinstance(v, bool) or v is None:
+            return ("" if v is None else int(v)) if csv_ else v
+        if isinstance(v, float):
+            return repr(v) if csv_ else (v if math.isfinite(v) else None)
+        return v
+
+    sidecar = path.with_name(path.name + ".json")
+    with atomic_outputs(path, sidecar) as (tmp, tmp_side):
+        with tmp.open("w", encoding="utf-8", newline="") as f:
+            if path.suffix.lower() == ".csv":
+                w = csv.DictWriter(f, fieldnames=REFERENCE_FIELDS)
+                w.writeheader()
+                for rec in records:
+                    w.writerow({k: value(v, True) for k, v in rec.to_dict().items()})
+            else:
+                for rec in records:
+                    f.write(json.dumps({k: value(v, False) for k, v in rec.to_dict().items()}) + "\n")
+        meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **metadata, "columns": list(REFERENCE_FIELDS),
+                "rows": len(records)}
+        tmp_side.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
+    return len(records)
+
+
+def run_reference(args: argparse.Namespace) -> int:
+    """Detect and measure every occurrence of the references in one recording."""
+    if len(args.recording) != 1:
+        raise SeamodemError("reference: give one recording with --reference")
+    out = check_writable(args.output)
+    if out.suffix.lower() not in (".csv", ".jsonl"):
+        raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+    for name in ("segment", "workers", "scheduler", "resume", "plot"):
+        if getattr(args, name, None):
+            raise SeamodemError(f"{name}: not available with --reference")
+    if args.turnaround is not None:
+        raise SeamodemError("turnaround: two-way ranging is not available with --reference")
+    if not (math.isfinite(args.v_max) and 0 < args.v_max < 100):
+        raise SeamodemError(f"v-max: must be in (0, 100) m/s, got {args.v_max!r}")
+    if not (math.isfinite(args.false_alarms_per_hour) and args.false_alarms_per_hour > 0):
+        raise SeamodemError(f"false-alarms-per-hour: must be > 0, got {args.false_alarms_per_hour!r}")
+    if args.all_channels and args.channel is not None:
+        raise SeamodemError("channel: give --channel N or --all-channels, not both")
+    recording = Path(args.recording[0])
+
+    from ..io.mat import RecordingWarning, open_recording
+    from ..transmit.reference import load_references
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RecordingWarning)
+        source = open_recording(recording, mat_variable=args.mat_variable, sample_rate_hz=args.sample_rate)
+    for w in caught:
+        print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
+    if source.n_channels > 1 and args.channel is None and not args.all_channels:
+        raise InputFileError(f"recording {recording} has {source.n_channels} channels: choose one with --channel, or --all-channels")
+    channels = source.check_channel(None if args.all_channels else (args.channel or 0))
+    references = [r for spec in args.reference for r in load_references(spec)]
+    sidecar = _own_sidecar(recording)
+    sound_speed = args.sound_speed if args.sound_speed is not None else DEFAULT_SOUND_SPEED_MPS
+    if not (math.isfinite(sound_speed) and sound_speed > 0):
+        raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
+    emissions = _emissions(args, sidecar, references)
+
+    from ..receive.reference import ReferenceReceiver, best_per_detection, keep_matching_reference, pair_up, to_record
+    from ..transmit.reference import reference_replica
+
+    replicas = [reference_replica(r) for r in references]
+    receiver = ReferenceReceiver(
+        [rep.reference for rep in replicas],
+        source.sample_rate_hz,
+        n_channels=len(channels),
+        sound_speed_mps=sound_speed,
+        v_max_mps=args.v_max,
+        false_alarms_per_hour=args.false_alarms_per_hour,
+        replicas=replicas,
+    )
+    found = list(receiver.run(source.blocks(channels)))
+    for f in found:
+        f.channel = channels[f.channel]
+        lo = int(f.fit.t_arrival_s * source.sample_rate_hz)
+        f.clipped = source.clips.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
+    found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
+    found = keep_matching_reference(found)
+    pair_up(found, eps_max=args.v_max / sound_speed)
+    records = [
+        to_record(f, emissions[f.reference.name], sound_speed_mps=sound_speed, clock_offset_s=args.clock_offset)
+        for f in found
+    ]
+    metadata = {
+        "created_by": command_line(),
+        "recording": str(recording),
+        "sample_rate_hz": source.sample_rate_hz,
+        "channels": channels,
+        "sound_speed_mps": sound_speed,
+        "clock_offset_s": args.clock_offset,
+        "v_max_mps": args.v_max,
+        "false_alarms_per_hour": args.false_alarms_per_hour,
+        "references": [r.to_dict() for r in receiver.references],
+        "front_end": {"centre_hz": receiver.plan.centre_hz, "baseband_rate_hz": receiver.plan.fs_bb,
+                      "decimation": receiver.plan.decimation},
+        "snr_definition": "in-band SNR over the reference's band [f_low, f_high] during the ping; E/N0 = SNR·B·T",
+    }
+    n = write_reference_records(out, records, metadata)
+    for note in source.clips.notes(str(recording), source.sample_rate_hz):
+        print(f"seamodem rx: warning: {note}", file=sys.stderr)
+    if any(e is None for e in emissions.values()) and records:
+        print("seamodem rx: warning: emission times unknown for some references (no sidecar, no --emit-start): "
+              "their tof_s and range_m are empty", file=sys.stderr)
+    if n == 0:
+        print(f"seamodem rx: warning: no reference found in {recording}", file=sys.stderr)
+    if not args.quiet:
+        per = {r.name: sum(rec.reference == r.name for rec in records) for r in receiver.references}
+        listed = ", ".join(f"{k}: {v}" for k, v in per.items())
+        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; c = {sound_speed:g} m/s)")
+    return 0

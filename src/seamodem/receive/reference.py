@@ -1,0 +1,815 @@
+"""Ranging on any known waveform: LFM/HFM chirps, m-sequence pings, templates (issue 16).
+
+The same steps as the frame receiver, with the frame's pilot replaced by a
+:class:`~seamodem.transmit.reference.ReferenceWaveform`:
+
+1. **Front end** (:class:`BandDecimator`): the recording is mixed to the
+   centre of the references' band and low-passed and decimated in one or two
+   polyphase stages (``scipy.signal.upfirdn``), streaming, memory bounded. A
+   first stage with a wide transition takes high rates (192–384 kHz) down
+   cheaply; its aliases fall outside the final band. DC and anything outside
+   the band are removed here.
+2. **Detection** (:class:`ReferenceDetector`): a bank of time-scaled replicas
+   s_a((1 + ε_b) t) over |ε| ≤ v_max/c (wideband Doppler is a scale, not a
+   frequency shift), spaced so that the loss between bins is at most 1 dB,
+   correlated by FFT. As :mod:`.detect`: z = |c|²/σ_c² (Exp(1) in noise,
+   σ_c² from the median), threshold η = ln(n_tests/rate) for a stated
+   false-alarm rate per hour (:func:`~seamodem.receive.detect.z_threshold`),
+   and ρ ≥ ρ_min (normalised correlation) against impulses; the first arrival
+   is the earliest distinct peak within ``multipath_window_s`` that reaches
+   ``first_path_fraction`` of the strongest.
+3. **Fine fit** (:func:`fit_reference`): maximum likelihood of (t_a, ε) for
+   r(t) = A e^{jθ} s_a((1 + ε)(t − t_a)) + w, |C(t_a, ε)| = |Σ r q*| with
+   the replica evaluated at arbitrary times: ε by dichotomy
+   (:func:`~seamodem.receive.doppler.dichotomy_max`, paper 002's bank +
+   dichotomy), t_a by dichotomy along the delay–Doppler ridge for each ε.
+4. **σ's**: the joint CRLB of the reference (:func:`~seamodem.transmit.reference.reference_crlb`)
+   at the measured E/N0, inflated by √χ² of the fit's residual when echoes or
+   a varying Doppler leave more than noise.
+5. **Pairs** (:func:`pair_doppler`): a preamble and a postamble of known
+   spacing T_sp give ε = T_sp/Δ − 1 from their measured spacing Δ, using each
+   ping's ridge coordinate so that the delay–Doppler coupling cancels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft
+import scipy.signal
+
+from ..dsp import lowpass_taps
+from ..errors import ConfigError
+from ..transmit.reference import ReferenceBound, ReferenceWaveform, Replica, reference_crlb
+from .detect import z_threshold
+from .doppler import dichotomy_max
+from .records import MeasurementRecord
+
+__all__ = [
+    "BandPlan",
+    "plan_band",
+    "BandDecimator",
+    "ReferenceDetector",
+    "ReferenceDetection",
+    "ReferenceFit",
+    "fit_reference",
+    "ReferenceRecord",
+    "REFERENCE_FIELDS",
+    "pair_doppler",
+    "ReferenceReceiver",
+    "best_per_detection",
+    "keep_matching_reference",
+    "pair_up",
+    "to_record",
+]
+
+#: a Doppler CRLB above this fraction of v_max/c means the ping cannot measure its Doppler (σ_ε is then v_max/c)
+DOPPLER_THRESHOLD = 0.1
+#: noise level window before the arrival, after a gap [s]
+_NOISE_GAP_S, _NOISE_WINDOW_S = 0.005, 0.05
+
+
+@dataclass(frozen=True)
+class BandPlan:
+    """Mixing frequency, decimation stages and rates of the front end.
+
+    Attributes
+    ----------
+    fs : float
+        Input rate [Hz].
+    centre_hz : float
+        Mixing frequency [Hz].
+    passband_hz : float
+        Half-width kept around the centre [Hz].
+    stages : tuple of (int, numpy.ndarray)
+        (decimation, taps) of each stage.
+    """
+
+    fs: float
+    centre_hz: float
+    passband_hz: float
+    stages: tuple
+
+    @property
+    def decimation(self) -> int:
+        return math.prod(d for d, _ in self.stages)
+
+    @property
+    def fs_bb(self) -> float:
+        """Baseband rate [Hz]."""
+        return self.fs / self.decimation
+
+    @property
+    def noise_bandwidth_hz(self) -> float:
+        """∫|H|² df of the last stage (earlier ones are flat over it) [Hz]: baseband noise variance = 2 N0 × this."""
+        d, taps = self.stages[-1]
+        return float(self.fs_bb * d * np.sum(taps**2))
+
+
+def plan_band(references: Iterable[ReferenceWaveform], fs: float, *, v_max_mps: float, sound_speed_mps: float) -> BandPlan:
+    """Front end for the union of the references' bands at input rate ``fs``.
+
+    Raises
+    ------
+    ConfigError
+        A band (widened by the largest Doppler) at or above fs/2.
+    """
+    refs = list(references)
+    eps = v_max_mps / sound_speed_mps
+    lo = min(r.f_low_hz for r in refs) * (1 - eps)
+    hi = max(r.f_high_hz for r in refs) * (1 + eps)
+    if hi >= fs / 2:
+        raise ConfigError(
+            "sample_rate_hz", f"the reference band reaches {hi:g} Hz (with Doppler), above the recording's Nyquist {fs / 2:g} Hz"
+        )
+    # the passband keeps the pings' spectral tails (window sidelobes) beyond the nominal band: a filtered
+    # ping would no longer match its replica, and an HFM's flat delay–Doppler ridge tilts at the slightest mismatch
+    centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) + max(50.0, 0.1 * (hi - lo))
+    transition = max(0.2 * half, 300.0)
+    # final complex rate: ≥ 2·(half + transition); aliases land in the transition only
+    d_total = max(1, int(fs // (2 * half + transition)))
+    stages = []
+    d2 = d_total
+    if d_total >= 16:
+        d1 = d_total // 4
+        d2 = d_total // d1
+        fs1 = fs / d1
+        # stage 1: pass up to the final stop edge, stop where aliases would reach it
+        stages.append((d1, lowpass_taps(fs, half + transition, fs1 - half - transition, 70.0)))
+        fs_in2 = fs1
+    else:
+        fs_in2 = fs
+    fs_bb = fs_in2 / d2
+    stop = min(fs_bb - half, fs_in2 / 2 * 0.999)
+    if d2 == 1:
+        stop = min(half + transition, fs_in2 / 2 * 0.999)
+    stages.append((d2, lowpass_taps(fs_in2, half, max(stop, half * 1.01), 70.0)))
+    return BandPlan(fs=float(fs), centre_hz=centre, passband_hz=half, stages=tuple(stages))
+
+
+class _Stage:
+    """Streaming complex low-pass and decimation by d: y[k] = Σ_m h[m] x[kd + h0 − m] (zero phase)."""
+
+    def __init__(self, d: int, taps: np.ndarray):
+        self.d, self.h = d, np.asarray(taps, dtype=float)
+        self.h0 = (len(taps) - 1) // 2
+        self.J = -(-(len(taps) - 1) // d)
+        self.buf = np.zeros(self.J * d - self.h0, complex)
+        self.buf_start = self.h0 - self.J * d
+        self.k = 0
+        self.n_in = 0
+
+    def push(self, x: np.ndarray, *, final: bool = False) -> np.ndarray:
+        self.n_in += len(x)
+        parts = [self.buf, x]
+        if final:
+            parts.append(np.zeros(self.h0 + self.d, complex))
+        self.buf = np.concatenate(parts)
+        end = self.buf_start + len(self.buf)
+        k_max = (end - 1 - self.h0) // self.d
+        if final:
+            k_max = min(k_max, -(-self.n_in // self.d) - 1)
+        if k_max < self.k:
+            return np.zeros(0, complex)
+        a = self.k * self.d + self.h0 - self.J * self.d
+        n_last = k_max * self.d + self.h0
+        seg = self.buf[a - self.buf_start : n_last - self.buf_start + 1]
+        y = scipy.signal.upfirdn(self.h, seg, down=self.d)[self.J : self.J + k_max - self.k + 1]
+        self.k = k_max + 1
+        keep = self.k * self.d + self.h0 - self.J * self.d
+        self.buf = self.buf[keep - self.buf_start :]
+        self.buf_start = keep
+        return y
+
+
+class BandDecimator:
+    """Streaming passband → complex baseband: x_pb = Re[y e^{j2π f_c t}], y[k] at t = k/fs_bb.
+
+    Examples
+    --------
+    >>> from seamodem.transmit.reference import parse_reference
+    >>> plan = plan_band([parse_reference("lfm:19000-29000:0.05")], 96000, v_max_mps=5, sound_speed_mps=1500)
+    >>> dec = BandDecimator(plan)
+    >>> n = len(dec.push(np.zeros(50_000))) + len(dec.flush())
+    >>> n == -(-50_000 // plan.decimation)
+    True
+    """
+
+    def __init__(self, plan: BandPlan):
+        self.plan = plan
+        self.stages = [_Stage(d, h) for d, h in plan.stages]
+        self.n_in = 0
+        self._ramp = np.zeros(0, complex)
+
+    def _mix(self, x: np.ndarray) -> np.ndarray:
+        if len(self._ramp) < len(x):
+            self._ramp = np.exp(-2j * np.pi * self.plan.centre_hz * np.arange(len(x)) / self.plan.fs)
+        cycles = math.fmod(self.plan.centre_hz * self.n_in, self.plan.fs) / self.plan.fs
+        y = 2.0 * np.asarray(x, dtype=float) * self._ramp[: len(x)] * np.exp(-2j * np.pi * cycles)
+        self.n_in += len(x)
+        return y
+
+    def push(self, x_pb: np.ndarray) -> np.ndarray:
+        y = self._mix(x_pb)
+        for s in self.stages:
+            y = s.push(y)
+        return y
+
+    def flush(self) -> np.ndarray:
+        y = np.zeros(0, complex)
+        for s in self.stages:
+            y = s.push(y, final=True)
+        return y
+
+
+@dataclass(frozen=True)
+class ReferenceDetection:
+    """A coarse detection: lag, scale bin and statistics.
+
+    Attributes
+    ----------
+    t_start_s : float
+        Coarse arrival (±½ baseband sample) [s].
+    eps : float
+        Scale bin ε_b.
+    z, rho : float
+        Detection statistic and normalised correlation.
+    """
+
+    t_start_s: float
+    eps: float
+    z: float
+    rho: float
+
+
+def _replica_samples(replica: Replica, fs_bb: float, carrier_hz: float, eps: float) -> np.ndarray:
+    n = int(math.ceil(replica.duration_s / (1 + eps) * fs_bb)) + 1
+    return replica.scaled(np.arange(n) / fs_bb, t_arrival_s=0.0, eps=eps, carrier_hz=carrier_hz)
+
+
+def _scale_spacing(replica: Replica, fs_bb: float, carrier_hz: float, eps_max: float) -> float:
+    """Largest scale step with ≤ 1 dB correlation loss (max over lags) between neighbouring bins, measured."""
+    q0 = _replica_samples(replica, fs_bb, carrier_hz, 0.0)
+    e0 = np.sum(np.abs(q0) ** 2)
+    n = scipy.fft.next_fast_len(2 * len(q0) + 8)
+    f0 = np.conj(scipy.fft.fft(q0, n))
+
+    def loss(step):
+        q = _replica_samples(replica, fs_bb, carrier_hz, step / 2)
+        c = scipy.fft.ifft(scipy.fft.fft(q, n) * f0)
+        return np.max(np.abs(c)) / math.sqrt(e0 * np.sum(np.abs(q) ** 2))
+
+    step = max(2 * eps_max, 1e-5)
+    while step > 1e-7 and loss(step) < 10 ** (-1 / 20):
+        step /= 1.5
+    return step
+
+
+class ReferenceDetector:
+    """Find one reference's arrivals in a stream of baseband samples (the bank of time-scaled replicas).
+
+    Parameters
+    ----------
+    replica : Replica
+    plan : BandPlan
+    v_max_mps, sound_speed_mps : float
+    false_alarms_per_hour : float
+        Design rate in white Gaussian noise.
+    min_rho : float
+    first_path_fraction, multipath_window_s : float
+        First-arrival rule (as :class:`~seamodem.receive.detect.PilotDetector`).
+    """
+
+    def __init__(
+        self,
+        replica: Replica,
+        plan: BandPlan,
+        *,
+        v_max_mps: float,
+        sound_speed_mps: float,
+        false_alarms_per_hour: float = 0.01,
+        min_rho: float = 0.1,
+        first_path_fraction: float = 0.3,
+        multipath_window_s: float = 0.03,
+    ):
+        self.replica, self.fs = replica, plan.fs_bb
+        self.carrier_hz = plan.centre_hz
+        eps_max = v_max_mps / sound_speed_mps
+        step = _scale_spacing(replica, self.fs, self.carrier_hz, eps_max)
+        n_side = int(math.ceil(eps_max / step))
+        self.eps = step * np.arange(-n_side, n_side + 1) if n_side else np.zeros(1)
+        self.replicas = [_replica_samples(replica, self.fs, self.carrier_hz, e) for e in self.eps]
+        self.length = max(len(q) for q in self.replicas)
+        self.energy = np.array([np.sum(np.abs(q) ** 2) for q in self.replicas])
+        self.eta = z_threshold(false_alarms_per_hour, len(self.eps), self.fs)
+        self.min_rho = float(min_rho)
+        self.first_path_fraction = float(first_path_fraction)
+        self.window = max(1, int(round(multipath_window_s * self.fs)))
+        self.half_lobe = max(1, int(math.ceil(self.fs / replica.reference.bandwidth_hz)))
+        self.holdoff = max(1, int(replica.duration_s * (1 - 2 * eps_max) * self.fs))
+        self.context = int(0.5 * self.fs)
+        self._spectra: dict[int, np.ndarray] = {}
+
+    def _bank(self, r: np.ndarray) -> np.ndarray:
+        """|c_b[j]|² of every bin b at every full-overlap lag j of ``r``: one FFT of r, one inverse per bin."""
+        n_out = len(r) - self.length + 1
+        n = scipy.fft.next_fast_len(len(r))
+        if n not in self._spectra:
+            self._spectra = {n: np.conj(np.stack([scipy.fft.fft(q.astype(np.complex64), n) for q in self.replicas]))}
+        spectrum = scipy.fft.fft(r.astype(np.complex64), n)
+        power = np.empty((len(self.replicas), n_out), dtype=np.float32)
+        for b, bank in enumerate(self._spectra[n]):
+            c = scipy.fft.ifft(spectrum * bank)[:n_out]
+            power[b] = c.real**2 + c.imag**2
+        return power
+
+    def find(self, r: np.ndarray, r_start: int, scan_from: int, *, final: bool) -> tuple[list[ReferenceDetection], int]:
+        """Detections at lags ≥ ``scan_from`` (global baseband indices; r[0] is index ``r_start``)."""
+        lo = max(r_start, scan_from - self.context)
+        seg = r[lo - r_start :]
+        if len(seg) < self.length:
+            return [], scan_from
+        power = self._bank(seg)
+        best = np.argmax(power, axis=0)
+        peak = power[best, np.arange(power.shape[1])].astype(np.float64)
+        noise = max(np.median(power[:, ::4]) / math.log(2), 1e-12 * float(np.max(peak)), np.finfo(float).tiny)
+        z = peak / noise
+        energy = np.cumsum(np.concatenate([[0.0], np.abs(seg) ** 2]))
+        window = (energy[self.length :] - energy[: len(energy) - self.length])[: len(z)]
+        rho = peak / (self.energy[best] * np.maximum(window, np.finfo(float).tiny))
+        amp = np.sqrt(peak)
+        n_lags = len(z)
+        hit = (z >= self.eta) & (rho >= self.min_rho)
+        out = []
+        pos = max(scan_from - lo, 0)
+        while True:
+            hits = np.flatnonzero(hit[pos:])
+            if hits.size == 0:
+                return out, lo + n_lags if n_lags > pos else scan_from
+            j0 = pos + int(hits[0])
+            end = j0 + self.window
+            if end >= n_lags and not final:
+                return out, lo + j0
+            end = min(end, n_lags - 1)
+            strongest = j0 + int(np.argmax(np.where(hit[j0 : end + 1], amp[j0 : end + 1], 0.0)))
+            # earlier paths are sought in the strongest path's own bin: another bin peaks earlier on the
+            # delay–Doppler ridge of a chirp, which must not pass for an earlier arrival
+            b = int(best[strongest])
+            own = np.sqrt(power[b].astype(np.float64))
+            own_hit = hit & (power[b] / noise >= self.eta)
+            j = self._first_arrival(own, own_hit, j0, strongest)
+            out.append(ReferenceDetection((lo + j) / self.fs, float(self.eps[b]), float(power[b, j] / noise), float(rho[j])))
+            pos = j + self.holdoff
+            if pos >= n_lags:
+                return out, lo + pos
+
+    def _first_arrival(self, amp, hit, j0: int, strongest: int) -> int:
+        floor = self.first_path_fraction * amp[strongest]
+        w = self.half_lobe
+        for j in range(j0, strongest - 2 * w + 1):
+            if hit[j] and amp[j] >= floor and amp[j] >= np.max(amp[max(0, j - w) : j + w + 1]):
+                return j
+        return strongest
+
+
+@dataclass(frozen=True)
+class ReferenceFit:
+    """Fine arrival time, Doppler scale and their bounds for one detection.
+
+    Attributes
+    ----------
+    t_arrival_s : float
+        Reception time of the reference's first sample, first path [s].
+    eps : float
+        Doppler scale ε = v_r/c.
+    gain : complex
+        Complex amplitude A (baseband units).
+    e_n0 : float
+        Measured E/N0 (linear).
+    snr_db : float
+        In-band SNR over [f_low, f_high] during the reference [dB].
+    sigma_t_s, sigma_eps : float
+        CRLB at the measured E/N0 × the misfit inflation √χ²; σ_ε is v_max/c when that CRLB exceeds
+        :data:`DOPPLER_THRESHOLD`·v_max/c; σ_t = √(σ_ridge² + g²σ_ε²) (the joint CRLB when σ_ε is).
+    ridge_t_s, sigma_ridge_s : float
+        The delay–Doppler ridge coordinate t_a + g·ε (g the reference's ridge slope) and its σ (the known-ε bound):
+        what two pings' spacing is measured with.
+    misfit : float
+        χ² of the residual per sample over the noise level (≈ 1: noise only).
+    ridge_slope_s : float
+        g of the reference (:class:`~seamodem.transmit.reference.ReferenceBound`).
+    """
+
+    t_arrival_s: float
+    eps: float
+    gain: complex
+    e_n0: float
+    snr_db: float
+    sigma_t_s: float
+    sigma_eps: float
+    ridge_t_s: float
+    sigma_ridge_s: float
+    misfit: float
+    ridge_slope_s: float = 0.0
+
+
+def fit_reference(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    replica: Replica,
+    carrier_hz: float,
+    detection: ReferenceDetection,
+    search_eps: float,
+    noise_bandwidth_hz: float,
+    eps_max: float,
+    bound: ReferenceBound | None = None,
+) -> ReferenceFit:
+    """Maximum-likelihood (t_a, ε) around a coarse detection.
+
+    Parameters
+    ----------
+    r : numpy.ndarray, complex
+        Baseband at carrier ``carrier_hz``; r[n] at t0 + n/fs.
+    detection : ReferenceDetection
+    search_eps : float
+        Half-width of the ε dichotomy (the bank spacing).
+    noise_bandwidth_hz : float
+        The front end's ∫|H|² df, to turn the baseband noise variance into N0.
+    eps_max : float
+        Largest |ε| searched (v_max/c).
+    bound : ReferenceBound, optional
+        :func:`~seamodem.transmit.reference.reference_crlb` of the replica (computed if not given).
+    """
+    bound = reference_crlb(replica) if bound is None else bound
+    g = bound.ridge_slope_s
+    dur = replica.duration_s
+    lo = max(0, int(math.floor((detection.t_start_s - 2 / fs - t0_s) * fs)))
+    hi = min(len(r), int(math.ceil((detection.t_start_s + dur * 1.01 + 2 / fs - t0_s) * fs)) + 1)
+    x = r[lo:hi]
+    t = t0_s + np.arange(lo, hi) / fs
+
+    def corr(ta, eps):
+        return abs(np.vdot(replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz), x))
+
+    def gauss_newton(ta, eps, *, free_eps: bool):
+        """One Gauss–Newton step of the ML fit x ≈ A q(t_a, ε) (A complex, t_a and ε real)."""
+        q, dq = replica.scaled_with_derivative(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+        a = np.vdot(q, x) / max(np.real(np.vdot(q, q)), np.finfo(float).tiny)
+        cols = [-(1 + eps) * a * dq] + ([(t - ta) * a * dq] if free_eps else []) + [q, 1j * q]
+        m = np.stack(cols, axis=1)
+        step = np.linalg.lstsq(np.concatenate([m.real, m.imag]), np.concatenate([(x - a * q).real, (x - a * q).imag]),
+                               rcond=None)[0]
+        # never jump beyond the main lobe, where the linearisation holds; shrink (t_a, ε) together so that a
+        # joint step stays on the delay–Doppler ridge
+        shrink = min(1.0, 0.5 / fs / max(abs(step[0]), 1e-300))
+        return ta + shrink * step[0], eps + (shrink * step[1] if free_eps else 0.0)
+
+    eps0, ta0 = detection.eps, detection.t_start_s
+    # the coarse lag is within half a sample: start from the best of a fine grid around it
+    grid = ta0 + np.linspace(-1.0, 1.0, 9) / fs
+    ta0 = float(grid[int(np.argmax([corr(tg, eps0) for tg in grid]))])
+
+    def best_t(eps):
+        ta = ta0 - g * (eps - eps0)  # along the delay–Doppler ridge
+        for _ in range(3):
+            ta, _ = gauss_newton(ta, eps, free_eps=False)
+        return ta
+
+    # profile likelihood over ε, by dichotomy (paper 002's bank, refined); t_a maximised for each ε
+    limit = 1.05 * eps_max
+    eps = dichotomy_max(
+        lambda e: corr(best_t(e), e), max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=1e-9
+    )
+    ta = best_t(eps)
+    for _ in range(2):  # joint polish of what the dichotomy's tolerance left, kept only if it improves the fit
+        ta1, eps1 = gauss_newton(ta, eps, free_eps=True)
+        if corr(ta1, eps1) > corr(ta, eps):
+            ta, eps = ta1, eps1
+    q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+    eq = float(np.real(np.vdot(q, q)))
+    gain = np.vdot(q, x) / eq
+    noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
+    inside = np.abs(q) > 0.1 * np.max(np.abs(q))
+    resid = x - gain * q
+    if noise is None:
+        noise = float(np.mean(np.abs(resid[inside]) ** 2))
+    # a noiseless recording: keep the figures finite (E/N0 then about 120 dB)
+    noise = max(noise, 1e-12 * abs(gain) ** 2 * float(np.mean(np.abs(q[inside]) ** 2)))
+    misfit = float(np.mean(np.abs(resid[inside]) ** 2) / max(noise, np.finfo(float).tiny))
+    # E/N0: E = ½|A|² Σ|q|²/fs (passband energy), N0 = σ²_bb / (2 ENBW)
+    e_n0 = abs(gain) ** 2 * eq / fs * noise_bandwidth_hz / max(noise, np.finfo(float).tiny)
+    band = replica.reference.bandwidth_hz
+    snr_db = 10 * math.log10(max(e_n0 / (band * dur / (1 + eps)), 1e-30))
+    _, s_e, s_ridge = bound.at(e_n0)
+    inflate = math.sqrt(max(1.0, misfit))
+    s_e, s_ridge = s_e * inflate, s_ridge * inflate
+    if s_e > DOPPLER_THRESHOLD * eps_max:
+        # below the Doppler threshold (an HFM at moderate SNR): the likelihood hardly varies along the ridge
+        # within ±v_max, the ML lands anywhere in the search range and the CRLB no longer describes its error
+        s_e = max(s_e, eps_max)
+    return ReferenceFit(
+        t_arrival_s=float(ta),
+        eps=float(eps),
+        gain=complex(gain),
+        e_n0=float(e_n0),
+        snr_db=snr_db,
+        sigma_t_s=math.hypot(s_ridge, g * s_e),
+        sigma_eps=s_e,
+        ridge_t_s=float(ta + g * eps),
+        sigma_ridge_s=s_ridge,
+        misfit=misfit,
+        ridge_slope_s=g,
+    )
+
+
+def _noise_level(r, fs, t0_s, ta, duration_s) -> float | None:
+    """Median-based baseband noise variance just before the arrival, else just after the reference."""
+    for a, b in (
+        (ta - _NOISE_GAP_S - _NOISE_WINDOW_S, ta - _NOISE_GAP_S),
+        (ta + duration_s + 0.03, ta + duration_s + 0.03 + _NOISE_WINDOW_S),
+    ):
+        lo, hi = int(math.ceil((a - t0_s) * fs)), int(math.floor((b - t0_s) * fs))
+        if lo >= 0 and hi <= len(r) and hi - lo >= 0.8 * _NOISE_WINDOW_S * fs:
+            return float(np.median(np.abs(r[lo:hi]) ** 2) / math.log(2))
+    return None
+
+
+@dataclass(frozen=True)
+class ReferenceRecord(MeasurementRecord):
+    """A :class:`MeasurementRecord` (same columns, same meanings) plus what a reference detection adds.
+
+    The tone columns (``v_r_tone_eq9_mps``, ``tone_c_n0_dbhz``) are NaN; ``v_r_mps``
+    and ``v_r_bank_mps`` are both the bank + dichotomy estimate.
+
+    Attributes
+    ----------
+    reference : str
+        Name of the reference that matched.
+    channel : int
+        Recording channel the measurement comes from (the best one when all are searched).
+    e_n0_db : float
+        Measured E/N0 of the ping [dB].
+    misfit : float
+        Residual χ² per sample over the noise (≈ 1 when only noise is left); σ's are inflated by √misfit.
+    role : str
+        "ping", "preamble" or "postamble". For a pair, ``t_arrival_s`` (and so ``tof_s``, ``range_m`` and
+        ``sigma_range_m``) uses the pair's Doppler to place the arrival on the ping's delay–Doppler
+        ridge when that is the more accurate (always for an HFM); ``v_r_mps`` stays the ping's own.
+    v_r_pair_mps, sigma_v_r_pair_mps : float
+        Doppler from the measured pre/postamble spacing and its σ [m/s] (NaN for lone pings).
+    clipped_samples : int
+        Clipped input samples within the ping.
+    """
+
+    reference: str = ""
+    channel: int = 0
+    e_n0_db: float = math.nan
+    misfit: float = math.nan
+    role: str = "ping"
+    v_r_pair_mps: float = math.nan
+    sigma_v_r_pair_mps: float = math.nan
+    clipped_samples: int = 0
+
+
+REFERENCE_FIELDS = tuple(f.name for f in dataclasses.fields(ReferenceRecord))
+
+
+@dataclass
+class _Found:
+    """One fitted detection, before it is tied to an emission."""
+
+    reference: ReferenceWaveform
+    detection: ReferenceDetection
+    fit: ReferenceFit
+    channel: int
+    clipped: int = 0
+    role: str = "ping"
+    eps_pair: float = math.nan
+    sigma_eps_pair: float = math.nan
+    t_pair_s: float = math.nan
+    sigma_t_pair_s: float = math.nan
+
+
+def pair_doppler(
+    t1_s: float, t2_s: float, sigma1_s: float, sigma2_s: float, *, spacing_s: float
+) -> tuple[float, float]:
+    """Doppler scale from the measured spacing of two pings emitted ``spacing_s`` apart.
+
+    The received pair is compressed by 1 + ε (SPEC §1): Δ = T_sp/(1 + ε), so
+    ε = T_sp/Δ − 1, σ_ε = (T_sp/Δ²)·√(σ1² + σ2²) (mean closing speed over the
+    packet).
+
+    Examples
+    --------
+    >>> eps, s = pair_doppler(1.0, 9.0 / (1 + 1e-3) + 1.0, 1e-6, 1e-6, spacing_s=9.0)
+    >>> round(eps * 1e3, 9)
+    1.0
+    """
+    delta = t2_s - t1_s
+    eps = spacing_s / delta - 1
+    return float(eps), float(spacing_s / delta**2 * math.hypot(sigma1_s, sigma2_s))
+
+
+class _Channel:
+    """One channel's front end, baseband buffer and one detector per reference."""
+
+    def __init__(self, plan: BandPlan, detectors: list[ReferenceDetector]):
+        self.decimator = BandDecimator(plan)
+        self.detectors = detectors
+        self.buf = np.zeros(0, complex)
+        self.buf_start = 0
+        self.scan = [0] * len(detectors)
+
+
+class ReferenceReceiver:
+    """Streaming receiver of several references on one or all channels of a recording.
+
+    Parameters
+    ----------
+    references : list of ReferenceWaveform
+    fs : float
+        Input rate [Hz].
+    n_channels : int
+        Channels fed to :meth:`run` (the best per detection is kept).
+    sound_speed_mps, v_max_mps, false_alarms_per_hour : float
+        As :class:`~seamodem.receive.settings.ReceiverSettings`; the false-alarm
+        rate is shared among references and channels.
+    replicas : list of Replica, optional
+        Built from the references when not given (templates read their file).
+    """
+
+    def __init__(
+        self,
+        references: list[ReferenceWaveform],
+        fs: float,
+        *,
+        n_channels: int = 1,
+        sound_speed_mps: float = 1500.0,
+        v_max_mps: float = 5.0,
+        false_alarms_per_hour: float = 0.01,
+        replicas: list[Replica] | None = None,
+        min_rho: float = 0.1,
+    ):
+        from ..transmit.reference import reference_replica
+
+        if not references:
+            raise ConfigError("reference", "give at least one reference waveform")
+        names = [r.name for r in references]
+        if len(set(names)) != len(names):
+            raise ConfigError("reference", f"names must be distinct, got {names}")
+        self.replicas = replicas or [reference_replica(r) for r in references]
+        self.references = [rep.reference for rep in self.replicas]
+        self.fs, self.c, self.v_max = float(fs), float(sound_speed_mps), float(v_max_mps)
+        self.plan = plan_band(self.references, fs, v_max_mps=v_max_mps, sound_speed_mps=sound_speed_mps)
+        rate = false_alarms_per_hour / (len(self.references) * n_channels)
+        self.bounds = [reference_crlb(rep) for rep in self.replicas]
+        proto = [
+            ReferenceDetector(rep, self.plan, v_max_mps=v_max_mps, sound_speed_mps=sound_speed_mps,
+                              false_alarms_per_hour=rate, min_rho=min_rho)
+            for rep in self.replicas
+        ]
+        self.channels = [_Channel(self.plan, proto) for _ in range(n_channels)]
+        self.chunk = int(4 * max(d.length for d in proto) + 2 * self.plan.fs_bb)
+        self.keep = int(max(d.length + d.window + d.context for d in proto) + 1.2 * (_NOISE_GAP_S + _NOISE_WINDOW_S) * self.plan.fs_bb)
+
+    def _process(self, ch: _Channel, index: int, *, final: bool) -> list[_Found]:
+        found = []
+        fs = self.plan.fs_bb
+        for i, det in enumerate(ch.detectors):
+            if not final and ch.buf_start + len(ch.buf) - ch.scan[i] < self.chunk:
+                continue
+            dets, ch.scan[i] = det.find(ch.buf, ch.buf_start, ch.scan[i], final=final)
+            for d in dets:
+                fit = fit_reference(
+                    ch.buf, fs, ch.buf_start / fs, replica=det.replica, carrier_hz=self.plan.centre_hz, detection=d,
+                    search_eps=max(det.eps[1] - det.eps[0], 1e-5) if len(det.eps) > 1 else 1e-4,
+                    noise_bandwidth_hz=self.plan.noise_bandwidth_hz, eps_max=self.v_max / self.c, bound=self.bounds[i],
+                )
+                found.append(_Found(self.references[i], d, fit, index))
+        # the fine fit and the next scan need the tail: keep what the slowest detector still needs
+        oldest = min(ch.scan) - self.keep
+        cut = max(0, min(oldest - ch.buf_start, len(ch.buf)))
+        ch.buf = ch.buf[cut:]
+        ch.buf_start += cut
+        return found
+
+    def run(self, blocks: Iterable[np.ndarray]) -> Iterator[_Found]:
+        """Fitted detections of every reference, channel by channel, as blocks (n, n_channels) arrive."""
+        for block in blocks:
+            block = np.asarray(block, dtype=float).reshape(len(block), -1)
+            for j, ch in enumerate(self.channels):
+                y = ch.decimator.push(block[:, j])
+                ch.buf = np.concatenate([ch.buf, y])
+                yield from self._process(ch, j, final=False)
+        for j, ch in enumerate(self.channels):
+            ch.buf = np.concatenate([ch.buf, ch.decimator.flush()])
+            yield from self._process(ch, j, final=True)
+
+
+def best_per_detection(found: list[_Found], *, tolerance_s: float) -> list[_Found]:
+    """Of detections of one reference within ``tolerance_s`` on different channels, the one with the highest E/N0."""
+    out: list[_Found] = []
+    for f in sorted(found, key=lambda f: (f.reference.name, f.fit.t_arrival_s)):
+        last = out[-1] if out else None
+        if last is not None and last.reference.name == f.reference.name and abs(f.fit.t_arrival_s - last.fit.t_arrival_s) < tolerance_s:
+            if f.fit.e_n0 > last.fit.e_n0:
+                out[-1] = f
+            continue
+        out.append(f)
+    return sorted(out, key=lambda f: f.fit.t_arrival_s)
+
+
+def keep_matching_reference(found: list[_Found]) -> list[_Found]:
+    """Of overlapping detections of different references (similar pings), the one with the best normalised correlation.
+
+    Two references that share a band (an LFM and an HFM of the same sweep)
+    correlate partly with each other's pings; the reference that was sent
+    matches with ρ ≈ S/(S + N), the other with less.
+    """
+    out: list[_Found] = []
+    for f in sorted(found, key=lambda f: f.fit.t_arrival_s):
+        last = out[-1] if out else None
+        if last is not None and last.reference.name != f.reference.name:
+            if f.fit.t_arrival_s - last.fit.t_arrival_s < 0.5 * max(f.reference.duration_s, last.reference.duration_s):
+                if f.detection.rho > last.detection.rho:
+                    out[-1] = f
+                continue
+        out.append(f)
+    return out
+
+
+def pair_up(found: list[_Found], *, eps_max: float) -> None:
+    """Mark pre/postamble pairs of references with ``postamble_s`` and set their pair Doppler (in place)."""
+    by_ref: dict[str, list[_Found]] = {}
+    for f in found:
+        if f.reference.postamble_s:
+            by_ref.setdefault(f.reference.name, []).append(f)
+    for items in by_ref.values():
+        items.sort(key=lambda f: f.fit.t_arrival_s)
+        i = 0
+        while i < len(items) - 1:
+            a, b = items[i], items[i + 1]
+            sp = a.reference.postamble_s
+            delta = b.fit.ridge_t_s - a.fit.ridge_t_s
+            if abs(delta - sp) <= 2 * eps_max * sp + 0.01 * a.reference.duration_s:
+                eps, sigma = pair_doppler(
+                    a.fit.ridge_t_s, b.fit.ridge_t_s, a.fit.sigma_ridge_s, b.fit.sigma_ridge_s, spacing_s=sp
+                )
+                a.role, b.role = "preamble", "postamble"
+                for f in (a, b):
+                    f.eps_pair, f.sigma_eps_pair = eps, sigma
+                    # the ping's own ε moves its arrival along the ridge; the pair's ε puts it back (HFM coupling)
+                    g = f.fit.ridge_slope_s
+                    f.t_pair_s = f.fit.ridge_t_s - g * eps
+                    f.sigma_t_pair_s = math.hypot(f.fit.sigma_ridge_s, g * sigma)
+                i += 2
+            else:
+                i += 1
+
+
+def to_record(f: _Found, emissions, *, sound_speed_mps: float, clock_offset_s: float = 0.0, source: str = "") -> ReferenceRecord:
+    """The measurement record of one fitted detection (``emissions``: a :class:`~seamodem.receive.settings.Emissions` or None)."""
+    c = sound_speed_mps
+    fit = f.fit
+    if math.isfinite(f.t_pair_s) and f.sigma_t_pair_s < fit.sigma_t_s:
+        fit = dataclasses.replace(fit, t_arrival_s=f.t_pair_s, sigma_t_s=f.sigma_t_pair_s)
+    if emissions is None:
+        k, t_emit = -1, math.nan
+    else:
+        t_emit_arrival = fit.t_arrival_s - (f.reference.postamble_s if f.role == "postamble" else 0.0)
+        k, t_emit = emissions.frame_for(t_emit_arrival - clock_offset_s)
+        if f.role == "postamble" and k >= 0:
+            t_emit += f.reference.postamble_s
+    tof = fit.t_arrival_s - t_emit - clock_offset_s
+    return ReferenceRecord(
+        frame_index=k,
+        t_emit_s=t_emit,
+        t_arrival_s=fit.t_arrival_s,
+        tof_s=tof,
+        range_m=c * tof,
+        v_r_mps=fit.eps * c,
+        snr_db=fit.snr_db,
+        v_r_tone_eq9_mps=math.nan,
+        v_r_bank_mps=fit.eps * c,
+        detection_z=f.detection.z,
+        detection_rho=f.detection.rho,
+        sigma_range_m=c * fit.sigma_t_s,
+        sigma_v_r_mps=c * fit.sigma_eps,
+        sigma_v_r_bank_mps=c * fit.sigma_eps,
+        tone_c_n0_dbhz=math.nan,
+        source=source,
+        reference=f.reference.name,
+        channel=f.channel,
+        e_n0_db=10 * math.log10(max(fit.e_n0, 1e-30)),
+        misfit=fit.misfit,
+        role=f.role,
+        v_r_pair_mps=f.eps_pair * c,
+        sigma_v_r_pair_mps=f.sigma_eps_pair * c,
+        clipped_samples=f.clipped,
+    )
