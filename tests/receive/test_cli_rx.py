@@ -253,3 +253,37 @@ def test_two_way_ranging_from_the_command_line(tmp_path):
     assert header["turnaround_s"] == turnaround
     assert [r.frame_index for r in recs] == [0, 1] and all(r.two_way for r in recs)
     assert np.allclose([r.range_m for r in recs], d, atol=1e-3)  # noise-free: the 0.4 mm self-noise, halved
+
+
+def test_arrival_before_the_first_emission_is_reported_not_written(beacon, tmp_path, capsys):
+    """Issue 14: emissions from 1.1 s on, the first frame arrives at 0.3 s: no emission, so no range."""
+    _, _, delayed, _ = beacon
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(delayed), "--emit-start", "1.1", "--emit-period", "1", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "wrote" in captured.out and "2 frames measured" in captured.out
+    assert "1 arrival(s) before the first emission not written" in captured.out
+    warning = [line for line in captured.err.splitlines() if "before the first emission" in line]
+    assert len(warning) == 1 and warning[0].startswith("seamodem rx: warning: 1 arrival(s)")
+    import pandas as pd
+
+    df = pd.read_csv(out)
+    assert list(df["frame_index"]) == [0, 1]
+    assert np.isfinite(df[["t_emit_s", "tof_s", "range_m"]].to_numpy()).all()
+    meta = json.loads(out.with_name("m.csv.json").read_text())
+    assert meta["rows"] == 2 and len(meta["unmatched_arrivals_s"]) == 1
+    assert meta["unmatched_arrivals_s"][0] == pytest.approx(0.1 + DELAY_S, abs=1e-3)
+
+
+def test_plot_folder_is_created_and_channel_numbering_is_named(beacon, tmp_path, capsys):
+    _, _, delayed, _ = beacon
+    figures = tmp_path / "new" / "figures"
+    assert main(["rx", str(delayed), "-o", str(tmp_path / "m.csv"), "--plot", str(figures), "--plot-frames", "1",
+                 "-q"]) == 0
+    assert len(list(figures.glob("frame_*.png"))) == 1
+    x, fs = soundfile.read(delayed)
+    stereo = tmp_path / "stereo.wav"
+    soundfile.write(stereo, np.stack([x, x], axis=1), fs, subtype="FLOAT")
+    err = _fail(capsys, ["rx", str(stereo), "--config", str(beacon[0] / "delayed.json"), "--channel", "2", "-o",
+                         str(tmp_path / "s.csv")], "channel 2 does not exist")
+    assert "numbered from 0 (0 to 1)" in err

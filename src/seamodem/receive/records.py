@@ -113,6 +113,14 @@ class MeasurementRecord:
     source : str
         The recording the frame was found in (batch decoding of several
         files, :mod:`seamodem.batch`); empty for a single recording.
+    azimuth_body_rad, elevation_body_rad : float
+        Direct path's direction of arrival in the vehicle's body frame (x
+        forward, y port, z up; :mod:`seamodem.receive.array`) [rad]; NaN with
+        one hydrophone.
+    sigma_azimuth_body_rad, sigma_elevation_body_rad : float
+        Their CRLB-based standard deviations [rad]; NaN with one hydrophone.
+    n_channels : int
+        Hydrophones used.
     """
 
     frame_index: int
@@ -139,6 +147,11 @@ class MeasurementRecord:
     ber: float = math.nan
     raw_ber: float = math.nan
     source: str = ""
+    azimuth_body_rad: float = math.nan
+    elevation_body_rad: float = math.nan
+    sigma_azimuth_body_rad: float = math.nan
+    sigma_elevation_body_rad: float = math.nan
+    n_channels: int = 1
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
