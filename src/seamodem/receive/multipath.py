@@ -39,7 +39,7 @@ from ..dsp import UniformTable
 from .detect import pilot_template
 from .doppler import dichotomy_max, matched_filter
 
-__all__ = ["PathFit", "fit_paths", "raised_cosine"]
+__all__ = ["PathFit", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine"]
 
 #: pilot autocorrelation lags kept in the model (|ρ_d| ≪ Np beyond: well-chosen pilot)
 _SIDELOBE_LAGS = 12
@@ -270,16 +270,9 @@ def direct_path_doppler(
     a = np.asarray(pilot, dtype=complex)
     n_p = len(a)
     T = config.symbol_period_s / (1 + eps)
-    first_s = paths.first_s
-    y = _pilot_outputs(r, fs, t0_s, config, first_s, eps)
-    if es_n0 is None:
-        es_n0 = _guard_es_n0(r, fs, t0_s, config=config, pilot=a, y=y, first_s=first_s, eps=eps)
-    # every echo whose pilot overlaps the first path's (delay < the pilot's length) enters y:
-    # look for those beyond the arrival fit's ± 12 symbols
-    found = fit_paths(r, fs, t0_s, config=config, pilot=a, t_start_s=first_s, eps=eps, es_n0=es_n0,
-                      initial_delays_s=paths.delays_s, max_paths=len(paths.delays_s) + max_echoes,
-                      window_s=(float(np.min(paths.delays_s)) - T, first_s + n_p * T))
-    paths = PathFit(delays_s=found.delays_s, amplitudes=found.amplitudes, first_s=first_s)
+    y = _pilot_outputs(r, fs, t0_s, config, paths.first_s, eps)
+    paths = find_echoes(r, fs, t0_s, config=config, pilot=a, paths=paths, eps=eps, es_n0=es_n0,
+                        max_echoes=max_echoes, first_outputs=y)
     lags = np.arange(-(n_p - 1), n_p) * T
     columns = [np.convolve(a, raised_cosine(lags - (d - paths.first_s), T, config.rolloff))[n_p - 1 : 2 * n_p - 1]
                for d in paths.delays_s]
@@ -296,6 +289,42 @@ def direct_path_doppler(
         return float(np.sum(np.abs(qh @ (y * np.exp(-2j * np.pi * config.carrier_hz * d * tau))) ** 2))
 
     return eps + dichotomy_max(explained, -search, search, tol=1e-9)
+
+
+def find_echoes(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    paths: PathFit,
+    eps: float,
+    es_n0: float | None = None,
+    max_echoes: int = 4,
+    first_outputs: np.ndarray | None = None,
+) -> PathFit:
+    """``paths`` with the echoes up to a pilot's length (Np·T) after the first path added.
+
+    The arrival fit looks ± 12 symbols around the detection; echoes 2–20 ms late
+    (deep water) lie beyond it, yet overlap the first path's pilot and, over the
+    whole frame, its data. :func:`fit_paths` is run again from ``paths`` over
+    [earliest − T, first + Np·T], with Es/N0 from the leading guard
+    (:func:`_guard_es_n0`) unless ``es_n0`` is given.
+    """
+    from .doppler import _pilot_outputs  # the pilot-output helper is private to doppler
+
+    a = np.asarray(pilot, dtype=complex)
+    n_p = len(a)
+    T = config.symbol_period_s / (1 + eps)
+    first_s = paths.first_s
+    if es_n0 is None:
+        y = _pilot_outputs(r, fs, t0_s, config, first_s, eps) if first_outputs is None else first_outputs
+        es_n0 = _guard_es_n0(r, fs, t0_s, config=config, pilot=a, y=y, first_s=first_s, eps=eps)
+    found = fit_paths(r, fs, t0_s, config=config, pilot=a, t_start_s=first_s, eps=eps, es_n0=es_n0,
+                      initial_delays_s=paths.delays_s, max_paths=len(paths.delays_s) + max_echoes,
+                      window_s=(float(np.min(paths.delays_s)) - T, first_s + n_p * T))
+    return PathFit(delays_s=found.delays_s, amplitudes=found.amplitudes, first_s=first_s)
 
 
 def _guard_es_n0(r, fs, t0_s, *, config: FrameConfig, pilot, y, first_s: float, eps: float) -> float:

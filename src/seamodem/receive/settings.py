@@ -48,6 +48,18 @@ class ReceiverSettings:
     equalizer : DfeSettings, optional
         A fixed equaliser; default: sized per frame to the delay spread
         measured on the pilots (:func:`~seamodem.receive.demodulate.dfe_for_span`).
+    blank_impulses : bool
+        Zero the passband samples of impulses (clicks) before anything else
+        (:mod:`~seamodem.receive.impulse`); the record's ``blanked_fraction``
+        says how much of each frame was blanked. Costs < 0.1 dB in white noise
+        (benchmarks/bench_doppler_paths.py), so on by default.
+    impulse_threshold : float
+        Impulse level in robust (median/MAD) standard deviations of the input.
+    whole_frame_doppler : bool
+        When decoding, fit each resolved path's Doppler over the whole frame
+        with the decoded symbols as the reference
+        (:mod:`~seamodem.receive.wholeframe`): ``v_r_mps`` is then the direct
+        path's.
 
     Examples
     --------
@@ -68,9 +80,13 @@ class ReceiverSettings:
     turbo_passes: int = 3
     follow_track: bool = True
     equalizer: Any = None
+    blank_impulses: bool = True
+    impulse_threshold: float = 5.0
+    whole_frame_doppler: bool = True
 
     def __post_init__(self):
         _positive("sound_speed", self.sound_speed_mps)
+        _positive("impulse_threshold", self.impulse_threshold)
         _positive("v_max", self.v_max_mps)
         _positive("false_alarms_per_hour", self.false_alarms_per_hour)
         if not (isinstance(self.clock_offset_s, (int, float)) and math.isfinite(self.clock_offset_s)):
@@ -81,7 +97,7 @@ class ReceiverSettings:
         p = self.turbo_passes
         if isinstance(p, bool) or not isinstance(p, int) or p < 1:
             raise ConfigError("turbo_passes", f"must be an integer >= 1, got {p!r}")
-        for name in ("decode", "follow_track"):
+        for name in ("decode", "follow_track", "blank_impulses", "whole_frame_doppler"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, f"must be true or false, got {getattr(self, name)!r}")
 

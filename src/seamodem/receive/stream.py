@@ -18,12 +18,17 @@ from collections.abc import Callable, Iterable, Iterator
 import numpy as np
 
 from ..config import FrameConfig
+from ..transmit.frame import build_frame
+from ..transmit.modulation import constellation
 from ..transmit.pilot import pilot_symbols
 from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
-from .demodulate import demodulate, payload_fields
+from .demodulate import FrameDecode, demodulate, payload_fields
 from .detect import Detection, PilotDetector
 from .frontend import FrontEnd, FrontEndPlan, plan_front_end
-from .measure import NOISE_GAP_S, NOISE_WINDOW_S, FrameMeasurement, frame_span_s, measure_frame
+from .impulse import ImpulseBlanker
+from .measure import NOISE_GAP_S, NOISE_WINDOW_S, FrameMeasurement, frame_span_s, impulse_excess, measure_frame
+from .multipath import find_echoes
+from .wholeframe import WholeFrameFit, fit_whole_frame
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .two_way import two_way_range_m
@@ -82,6 +87,7 @@ class Receiver:
         self.pilot = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else np.asarray(pilot, complex)
         self.payloads = None if payloads is None else list(payloads)
         self.on_frame = on_frame
+        self._blanker: ImpulseBlanker | None = None
 
     def _record(self, m: FrameMeasurement, bb: np.ndarray, t0_s: float, fs: float) -> MeasurementRecord:
         s = self.settings
@@ -93,38 +99,109 @@ class Receiver:
         else:
             k, t_emit = self.emissions.frame_for(t_arr - s.turnaround_s)
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
-        sigma_tau = float(delay_crlb_s(self.config, m.pilot.snr_db))
+        # impulses that blanking left are noise the median-based SNR does not see
+        excess = impulse_excess(bb, self.plan, t0_s, t_start_s=t_arr, duration_s=self.config.frame_duration_s)
+        sigma_tau = float(delay_crlb_s(self.config, m.pilot.snr_db)) * math.sqrt(excess)
         if s.turnaround_s is not None:
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
         sent = None
         if self.payloads is not None and 0 <= k < len(self.payloads):
             sent = self.payloads[k]
         dec = demodulate(m, bb, t0_s, fs, config=self.config, pilot=self.pilot, settings=s, sent_payload=sent)
+        doppler = self._doppler(m, dec, bb, t0_s, fs, excess)
         return MeasurementRecord(
             frame_index=int(k),
             t_emit_s=float(t_emit),
             t_arrival_s=float(t_arr),
             tof_s=float(tof),
             range_m=float(c * tof),
-            v_r_mps=m.v_tone_ml_mps,
             snr_db=float(m.pilot.snr_db),
             v_r_tone_eq9_mps=m.v_tone_eq9_mps,
             v_r_bank_mps=float(m.pilot.v_mps),
             detection_z=m.detection.z,
             detection_rho=m.detection.rho,
             sigma_range_m=c * sigma_tau,
-            sigma_v_r_mps=float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)),
-            sigma_v_r_bank_mps=float(pilot_velocity_crlb_mps(self.config, m.pilot.snr_db, sound_speed_mps=c)),
+            sigma_v_r_bank_mps=float(pilot_velocity_crlb_mps(self.config, m.pilot.snr_db, sound_speed_mps=c)) * math.sqrt(excess),
             tone_c_n0_dbhz=10 * math.log10(max(m.tone.c_n0_hz, 1e-30)),
             two_way=s.turnaround_s is not None,
+            blanked_fraction=self._blanked_fraction(m),
+            **doppler,
             **payload_fields(dec),
         )
+
+    def _blanked_fraction(self, m: FrameMeasurement) -> float:
+        if self._blanker is None:
+            return math.nan
+        fs = self.plan.fs
+        start = m.pilot.t_start_s
+        return self._blanker.blanked_fraction(int(start * fs), int((start + self.config.frame_duration_s) * fs))
+
+    def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
+                 excess: float) -> dict:
+        """v_r_mps, its σ and source: the direct path's whole-frame Doppler when decoded, else the tone ML.
+
+        The tone sums every path; it is flagged as multipath-biased when it and
+        the direct path's own estimate (whole-frame fit, else the pilot bank)
+        differ by more than 3 combined σ. Without the whole-frame fit, such a
+        disagreement beyond the bank's own 3σ is added to the tone's σ: the
+        bias it reveals is what the tone's CRLB does not cover.
+        """
+        c = self.settings.sound_speed_mps
+        v_tone = m.v_tone_ml_mps
+        sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c))
+        sigma_bank = float(pilot_velocity_crlb_mps(self.config, m.pilot.snr_db, sound_speed_mps=c)) * math.sqrt(excess)
+        fit = self._whole_frame(m, dec, bb, t0_s, fs) if dec is not None and self.settings.whole_frame_doppler else None
+        if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
+            wf, first, source = fit
+            v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first])
+            biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
+            return dict(v_r_mps=v, sigma_v_r_mps=sigma, v_r_source=source, v_r_tone_mps=v_tone,
+                        tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
+                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps))
+        if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
+            return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, v_r_source="bank",
+                        v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s))
+        gap = abs(v_tone - m.pilot.v_mps)
+        excess = max(0.0, gap**2 - 9 * sigma_bank**2)
+        return dict(v_r_mps=v_tone, sigma_v_r_mps=math.sqrt(sigma_tone**2 + excess), v_r_source="tone",
+                    v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
+                    n_paths=len(m.paths.delays_s))
+
+    def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
+        """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""
+        cfg, c = self.config, self.settings.sound_speed_mps
+        if dec.crc_ok:
+            data = build_frame(cfg, dec.payload).data_symbols
+            trusted = np.ones(cfg.n_data, bool)
+            source = "whole_frame"
+        else:
+            # pilots and the data decisions that lie close to their constellation point
+            points = constellation(cfg.modulation)
+            soft = np.asarray(dec.equalized)[: cfg.n_data]
+            nearest = np.argmin(np.abs(soft[:, None] - points[None, :]), axis=1)
+            data = points[nearest]
+            half_gap = 0.5 * np.min(np.abs(points[1:] - points[0]))
+            trusted = np.abs(soft - data) < 0.5 * half_gap
+            source = "whole_frame_decisions"
+        symbols = np.concatenate([self.pilot, data])
+        reference = np.concatenate([np.ones(cfg.n_pilot, bool), trusted])
+        eps = m.pilot.v_mps / c
+        paths = find_echoes(bb, fs, t0_s, config=cfg, pilot=self.pilot, paths=m.paths, eps=eps)
+        try:
+            wf: WholeFrameFit = fit_whole_frame(bb, fs, t0_s, config=cfg, symbols=symbols, reference=reference,
+                                                delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,
+                                                sound_speed_mps=c)
+        except ValueError:  # too few trusted symbols
+            return None
+        first = int(np.argmin(np.abs(wf.delays_s - paths.first_s)))
+        return wf, first, source
 
     def run(self, blocks: Iterable[np.ndarray], *, fs: float) -> Iterator[MeasurementRecord]:
         """Records of the frames in consecutive real passband ``blocks`` at rate ``fs``, as found."""
         cfg, s = self.config, self.settings
         plan = plan_front_end(cfg, fs, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
         fe = FrontEnd(plan)
+        self._blanker = ImpulseBlanker(threshold=s.impulse_threshold) if s.blank_impulses else None
         det = PilotDetector(
             cfg,
             plan.fs_data,
@@ -138,8 +215,9 @@ class Receiver:
         state = _Buffers()
         scan_from = 0
         pending: list[Detection] = []
+        blanker = self._blanker
         for block in blocks:
-            state.append(*fe.push(block))
+            state.append(*fe.push(block if blanker is None else blanker.push(block)))
             found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=False)
             pending.extend(found)
             yield from self._measure_ready(pending, state, plan, span, final=False)
@@ -148,6 +226,10 @@ class Receiver:
                 + [int((d.t_start_s - NOISE_GAP_S - NOISE_WINDOW_S) * plan.fs_data) - 64 for d in pending]
             )
             state.trim(oldest, plan)
+            if blanker is not None:
+                blanker.forget_before(state.bb_start * plan.data.decimation)
+        if blanker is not None:
+            state.append(*fe.push(blanker.flush()))
         state.append(*fe.flush())
         found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=True)
         pending.extend(found)

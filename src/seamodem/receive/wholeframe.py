@@ -158,8 +158,9 @@ def fit_whole_frame(
     n_segments : int
         Segments whose phases the Doppler and the drift are fitted to.
     sweeps : int
-        Passes over the paths (each path twice per pass: the Doppler moves the
-        symbol instants, so the matched filter is run again).
+        Passes over the paths (one when there is a single path). In the first,
+        each path's matched filter runs twice: the Doppler found moves the
+        symbol instants.
     """
     c = sound_speed_mps
     f0 = config.carrier_hz
@@ -196,11 +197,12 @@ def fit_whole_frame(
         return y * np.exp(-1j * extra) * np.conj(x[ref_idx]), inst
 
     sigma_b = np.full(n_paths, math.inf)
-    for _sweep in range(sweeps):
+    # a lone path has nothing to alternate with: one sweep; later sweeps start close, one pass each
+    for sweep in range(sweeps if n_paths > 1 else 1):
         for p in range(n_paths):
             others = models.sum(axis=0) - models[p]
             r = seg_bb - others
-            for _ in range(2):
+            for _ in range(2 if sweep == 0 else 1):
                 z, inst = outputs(p, r)
                 zs = np.bincount(seg_of, z.real, n_segments) + 1j * np.bincount(seg_of, z.imag, n_segments)
                 counts = np.bincount(seg_of, minlength=n_segments).astype(float)
@@ -217,8 +219,11 @@ def fit_whole_frame(
                 sigma_b[p] = math.sqrt(cov[1, 1])
                 eps[p] += coef[1] / (2 * np.pi * f0)
                 beta[p] += coef[2] / (np.pi * f0)
-            z, _ = outputs(p, r)
-            amps[p] = np.mean(z)
+            # the amplitude from the last outputs, less the phase the update added to the model
+            # (c1·(t − τ_p) + c2·((t − t_c)² − (D/2)²)); the update moves the instants by a hair
+            half = config.frame_duration_s / 2
+            tk = inst - (delays[p] + half)
+            amps[p] = np.mean(z * np.exp(-1j * (coef[1] * (tk + half) + coef[2] * (tk**2 - half**2))))
             models[p] = model(p)
     # noise per matched-filter output from the residual of all paths, at the first path's instants
     resid = seg_bb - models.sum(axis=0)
