@@ -72,6 +72,12 @@ def add_parser(sub) -> None:
         help="measure only: skip equalising and decoding the payloads",
     )
     p.add_argument(
+        "--no-blanking",
+        dest="blank_impulses",
+        action="store_false",
+        help="keep impulses (clicks): no median/MAD impulse blanking of the input before the receiver",
+    )
+    p.add_argument(
         "--turbo-passes",
         type=int,
         default=3,
@@ -219,6 +225,7 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
         false_alarms_per_hour=args.false_alarms_per_hour,
         decode=args.decode,
         turbo_passes=args.turbo_passes,
+        blank_impulses=args.blank_impulses,
     )
     return _Inputs(recording, info, config, emissions, settings, pilot, payloads)
 

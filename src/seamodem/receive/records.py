@@ -70,7 +70,8 @@ class MeasurementRecord:
     range_m : float
         Slant range c·tof [m].
     v_r_mps : float
-        Mean closing speed over the frame, tone maximum-likelihood estimate [m/s].
+        Mean closing speed of the direct path over the frame [m/s]; from the
+        estimate ``v_r_source`` names.
     snr_db : float
         Measured in-band SNR (SPEC §1): frame power over the noise measured
         just before and after the frame, in B [dB]; from the pilot residual
@@ -86,7 +87,10 @@ class MeasurementRecord:
     sigma_range_m : float
         Std of range_m from the delay CRLB at the measured SNR [m].
     sigma_v_r_mps : float
-        Std of v_r_mps from the tone CRLB at the measured tone C/N0 [m/s].
+        Std of v_r_mps [m/s]: whole-frame fit, the deviation of its segments'
+        phases, at least the known-signal CRLB; tone, its CRLB at the measured
+        C/N0, inflated by its disagreement with the pilot bank when that
+        exceeds 3 of the bank's σ.
     sigma_v_r_bank_mps : float
         Std of v_r_bank_mps from the pilot-Doppler CRLB at the measured SNR [m/s].
     tone_c_n0_dbhz : float
@@ -121,6 +125,24 @@ class MeasurementRecord:
         Their CRLB-based standard deviations [rad]; NaN with one hydrophone.
     n_channels : int
         Hydrophones used.
+    v_r_tone_mps : float
+        Tone maximum-likelihood mean closing speed [m/s] (sums every path).
+    v_r_source : str
+        Where ``v_r_mps`` comes from: ``whole_frame`` (direct path's Doppler
+        fitted over the whole decoded frame), ``whole_frame_decisions`` (CRC
+        failed: pilots and confident decisions as the reference), ``tone``
+        (tone ML: not decoded).
+    tone_multipath_biased : bool or None
+        The tone ML disagrees with the direct path's Doppler (whole-frame fit,
+        else pilot bank) beyond 3 combined σ: echoes with other Doppler pull it.
+    v_r_paths_spread_mps : float
+        Largest minus smallest Doppler of the paths fitted over the whole
+        frame [m/s]; NaN without the whole-frame fit.
+    n_paths : int
+        Paths resolved (whole-frame fit, else the arrival fit).
+    blanked_fraction : float
+        Fraction of the frame's input samples zeroed as impulses; NaN with
+        blanking off.
     """
 
     frame_index: int
@@ -152,6 +174,12 @@ class MeasurementRecord:
     sigma_azimuth_body_rad: float = math.nan
     sigma_elevation_body_rad: float = math.nan
     n_channels: int = 1
+    v_r_tone_mps: float = math.nan
+    v_r_source: str = ""
+    tone_multipath_biased: bool | None = None
+    v_r_paths_spread_mps: float = math.nan
+    n_paths: int = 0
+    blanked_fraction: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
