@@ -214,7 +214,7 @@ def _open_mat5(path: Path, variable: str | None, rate: float | None) -> Recordin
 
     try:
         m = scipy.io.loadmat(str(path))
-    except (ValueError, TypeError, OSError, NotImplementedError) as exc:
+    except (ValueError, TypeError, OSError, NotImplementedError, IndexError, KeyError) as exc:
         raise InputFileError(f"{path} is not a readable MATLAB file: {str(exc).splitlines()[0] if str(exc) else exc!r}") from None
     data = {k: v for k, v in m.items() if not k.startswith("__")}
     numeric = {k for k, v in data.items() if isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)}
@@ -255,7 +255,11 @@ def _open_mat73(path: Path, variable: str | None, rate: float | None) -> Recordi
         datasets = {k: v for k, v in f.items() if isinstance(v, h5py.Dataset)}
         shapes = {k: tuple(v.shape) for k, v in datasets.items()}
         numeric = {k for k, v in datasets.items() if v.dtype.names is None and np.issubdtype(v.dtype, np.number)}
-        complex_ = {k for k, v in datasets.items() if v.dtype.names and {"real", "imag"} <= set(v.dtype.names)}
+        complex_ = {
+            k for k, v in datasets.items()
+            if (v.dtype.names and {"real", "imag"} <= set(v.dtype.names)) or np.issubdtype(v.dtype, np.complexfloating)
+        }
+        numeric -= complex_
         name = _choose_variable(shapes, numeric | complex_, path, variable)
         ds = datasets[name]
         if ds.dtype.names is not None and name not in complex_:

@@ -3,12 +3,12 @@
 The same steps as the frame receiver, with the frame's pilot replaced by a
 :class:`~seamodem.transmit.reference.ReferenceWaveform`:
 
-1. **Front end** (:class:`BandDecimator`): the recording is mixed to the
-   centre of the references' band and low-passed and decimated in one or two
-   polyphase stages (``scipy.signal.upfirdn``), streaming, memory bounded. A
-   first stage with a wide transition takes high rates (192–384 kHz) down
-   cheaply; its aliases fall outside the final band. DC and anything outside
-   the band are removed here.
+1. **Front end** (:class:`BandDecimator`): the frame receiver's
+   frequency-domain front end (:mod:`.frontend`: one real FFT per block, the
+   band's bins filtered and inverse-transformed at the decimated size) on the
+   union of the references' bands: decimation costs the same at 384 kHz as
+   at 96 kHz per input sample, memory stays a few blocks. DC and anything
+   outside the band are removed here.
 2. **Detection** (:class:`ReferenceDetector`): a bank of time-scaled replicas
    s_a((1 + ε_b) t) over |ε| ≤ v_max/c (wideband Doppler is a scale, not a
    frequency shift), spaced so that the loss between bins is at most 1 dB,
@@ -47,6 +47,7 @@ from ..errors import ConfigError
 from ..transmit.reference import ReferenceBound, ReferenceWaveform, Replica, reference_crlb
 from .detect import z_threshold
 from .doppler import dichotomy_max
+from .frontend import FrontEnd, FrontEndPlan, _Branch
 from .records import MeasurementRecord
 
 __all__ = [
@@ -75,43 +76,49 @@ _NOISE_GAP_S, _NOISE_WINDOW_S = 0.005, 0.05
 
 @dataclass(frozen=True)
 class BandPlan:
-    """Mixing frequency, decimation stages and rates of the front end.
+    """Mixing frequency, filter and rates of the front end.
 
     Attributes
     ----------
-    fs : float
-        Input rate [Hz].
     centre_hz : float
         Mixing frequency [Hz].
     passband_hz : float
         Half-width kept around the centre [Hz].
-    stages : tuple of (int, numpy.ndarray)
-        (decimation, taps) of each stage.
+    front_end : FrontEndPlan
+        The frame receiver's frequency-domain front end (:mod:`.frontend`) set
+        to this band (its tone branch is the same band, unused).
     """
 
-    fs: float
     centre_hz: float
     passband_hz: float
-    stages: tuple
+    front_end: FrontEndPlan
+
+    @property
+    def fs(self) -> float:
+        """Input rate [Hz]."""
+        return self.front_end.fs
 
     @property
     def decimation(self) -> int:
-        return math.prod(d for d, _ in self.stages)
+        return self.front_end.data.decimation
 
     @property
     def fs_bb(self) -> float:
         """Baseband rate [Hz]."""
-        return self.fs / self.decimation
+        return self.front_end.fs_data
 
     @property
     def noise_bandwidth_hz(self) -> float:
-        """∫|H|² df of the last stage (earlier ones are flat over it) [Hz]: baseband noise variance = 2 N0 × this."""
-        d, taps = self.stages[-1]
-        return float(self.fs_bb * d * np.sum(taps**2))
+        """∫|H|² df of the front end [Hz]: baseband noise variance = 2 N0 × this."""
+        return self.front_end.noise_bandwidth_hz("data")
 
 
 def plan_band(references: Iterable[ReferenceWaveform], fs: float, *, v_max_mps: float, sound_speed_mps: float) -> BandPlan:
     """Front end for the union of the references' bands at input rate ``fs``.
+
+    The stop edge is fs_bb − passband: what aliases on decimation lands in the
+    transition band only, never on the references' band; the filter costs
+    nothing more for being long (it is applied in the frequency domain).
 
     Raises
     ------
@@ -129,65 +136,23 @@ def plan_band(references: Iterable[ReferenceWaveform], fs: float, *, v_max_mps: 
     # the passband keeps the pings' spectral tails (window sidelobes) beyond the nominal band: a filtered
     # ping would no longer match its replica, and an HFM's flat delay–Doppler ridge tilts at the slightest mismatch
     centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) + max(50.0, 0.1 * (hi - lo))
-    transition = max(0.2 * half, 300.0)
-    # final complex rate: ≥ 2·(half + transition); aliases land in the transition only
-    d_total = max(1, int(fs // (2 * half + transition)))
-    stages = []
-    d2 = d_total
-    if d_total >= 16:
-        d1 = d_total // 4
-        d2 = d_total // d1
-        fs1 = fs / d1
-        # stage 1: pass up to the final stop edge, stop where aliases would reach it
-        stages.append((d1, lowpass_taps(fs, half + transition, fs1 - half - transition, 70.0)))
-        fs_in2 = fs1
-    else:
-        fs_in2 = fs
-    fs_bb = fs_in2 / d2
-    stop = min(fs_bb - half, fs_in2 / 2 * 0.999)
-    if d2 == 1:
-        stop = min(half + transition, fs_in2 / 2 * 0.999)
-    stages.append((d2, lowpass_taps(fs_in2, half, max(stop, half * 1.01), 70.0)))
-    return BandPlan(fs=float(fs), centre_hz=centre, passband_hz=half, stages=tuple(stages))
-
-
-class _Stage:
-    """Streaming complex low-pass and decimation by d: y[k] = Σ_m h[m] x[kd + h0 − m] (zero phase)."""
-
-    def __init__(self, d: int, taps: np.ndarray):
-        self.d, self.h = d, np.asarray(taps, dtype=float)
-        self.h0 = (len(taps) - 1) // 2
-        self.J = -(-(len(taps) - 1) // d)
-        self.buf = np.zeros(self.J * d - self.h0, complex)
-        self.buf_start = self.h0 - self.J * d
-        self.k = 0
-        self.n_in = 0
-
-    def push(self, x: np.ndarray, *, final: bool = False) -> np.ndarray:
-        self.n_in += len(x)
-        parts = [self.buf, x]
-        if final:
-            parts.append(np.zeros(self.h0 + self.d, complex))
-        self.buf = np.concatenate(parts)
-        end = self.buf_start + len(self.buf)
-        k_max = (end - 1 - self.h0) // self.d
-        if final:
-            k_max = min(k_max, -(-self.n_in // self.d) - 1)
-        if k_max < self.k:
-            return np.zeros(0, complex)
-        a = self.k * self.d + self.h0 - self.J * self.d
-        n_last = k_max * self.d + self.h0
-        seg = self.buf[a - self.buf_start : n_last - self.buf_start + 1]
-        y = scipy.signal.upfirdn(self.h, seg, down=self.d)[self.J : self.J + k_max - self.k + 1]
-        self.k = k_max + 1
-        keep = self.k * self.d + self.h0 - self.J * self.d
-        self.buf = self.buf[keep - self.buf_start :]
-        self.buf_start = keep
-        return y
+    transition = max(0.3 * half, 300.0)
+    d = max(1, int(fs // (2 * half + transition)))
+    stop = min(fs / d - half, 0.5 * fs * 0.999)
+    branch = _Branch(centre, half, stop, d, lowpass_taps(float(fs), half, stop, 80.0))
+    margin = d * math.ceil(branch.half_length / d)
+    block = d * scipy.fft.next_fast_len(max(4 * margin // d + 1, (1 << 18) // d))
+    if round(centre * block / fs) + (block // d + 1) // 2 > block // 2 or round(centre * block / fs) - block // d // 2 < 0:
+        raise ConfigError("sample_rate_hz", f"the reference band does not fit between 0 and fs/2 = {fs / 2:g} Hz")
+    plan = FrontEndPlan(fs=float(fs), data=branch, tone=branch, block_size=block, hop=block - 2 * margin, margin=margin)
+    return BandPlan(centre_hz=centre, passband_hz=half, front_end=plan)
 
 
 class BandDecimator:
     """Streaming passband → complex baseband: x_pb = Re[y e^{j2π f_c t}], y[k] at t = k/fs_bb.
+
+    The frame receiver's :class:`~seamodem.receive.frontend.FrontEnd` (one
+    real FFT per block, the band's bins kept and filtered), on the references' band.
 
     Examples
     --------
@@ -201,29 +166,13 @@ class BandDecimator:
 
     def __init__(self, plan: BandPlan):
         self.plan = plan
-        self.stages = [_Stage(d, h) for d, h in plan.stages]
-        self.n_in = 0
-        self._ramp = np.zeros(0, complex)
-
-    def _mix(self, x: np.ndarray) -> np.ndarray:
-        if len(self._ramp) < len(x):
-            self._ramp = np.exp(-2j * np.pi * self.plan.centre_hz * np.arange(len(x)) / self.plan.fs)
-        cycles = math.fmod(self.plan.centre_hz * self.n_in, self.plan.fs) / self.plan.fs
-        y = 2.0 * np.asarray(x, dtype=float) * self._ramp[: len(x)] * np.exp(-2j * np.pi * cycles)
-        self.n_in += len(x)
-        return y
+        self._fe = FrontEnd(plan.front_end)
 
     def push(self, x_pb: np.ndarray) -> np.ndarray:
-        y = self._mix(x_pb)
-        for s in self.stages:
-            y = s.push(y)
-        return y
+        return self._fe.push(x_pb)[0]
 
     def flush(self) -> np.ndarray:
-        y = np.zeros(0, complex)
-        for s in self.stages:
-            y = s.push(y, final=True)
-        return y
+        return self._fe.flush()[0]
 
 
 @dataclass(frozen=True)
@@ -300,7 +249,7 @@ class ReferenceDetector:
         self.carrier_hz = plan.centre_hz
         eps_max = v_max_mps / sound_speed_mps
         step = _scale_spacing(replica, self.fs, self.carrier_hz, eps_max)
-        n_side = int(math.ceil(eps_max / step))
+        n_side = max(0, int(math.ceil(eps_max / step - 0.5)))  # bins k·step, |k| ≤ n_side, cover ±ε_max within ±step/2
         self.eps = step * np.arange(-n_side, n_side + 1) if n_side else np.zeros(1)
         self.replicas = [_replica_samples(replica, self.fs, self.carrier_hz, e) for e in self.eps]
         self.length = max(len(q) for q in self.replicas)
@@ -455,16 +404,19 @@ def fit_reference(
     t = t0_s + np.arange(lo, hi) / fs
 
     def corr(ta, eps):
-        return abs(np.vdot(replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz), x))
+        """|⟨q, x⟩|/‖q‖: the likelihood with A unknown (‖q‖ varies as 1/√(1 + ε); left out, it biases ε along the ridge)."""
+        q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+        return abs(np.vdot(q, x)) / math.sqrt(max(np.real(np.vdot(q, q)), np.finfo(float).tiny))
 
     def gauss_newton(ta, eps, *, free_eps: bool):
         """One Gauss–Newton step of the ML fit x ≈ A q(t_a, ε) (A complex, t_a and ε real)."""
         q, dq = replica.scaled_with_derivative(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
         a = np.vdot(q, x) / max(np.real(np.vdot(q, q)), np.finfo(float).tiny)
         cols = [-(1 + eps) * a * dq] + ([(t - ta) * a * dq] if free_eps else []) + [q, 1j * q]
-        m = np.stack(cols, axis=1)
-        step = np.linalg.lstsq(np.concatenate([m.real, m.imag]), np.concatenate([(x - a * q).real, (x - a * q).imag]),
-                               rcond=None)[0]
+        m = np.stack(cols)
+        resid = x - a * q
+        # real least squares on (Re, Im) by its normal equations: Re(M Mᴴ) step = Re(M residual*)
+        step = np.linalg.solve(np.real(m @ np.conj(m).T), np.real(np.conj(m) @ resid))
         # never jump beyond the main lobe, where the linearisation holds; shrink (t_a, ε) together so that a
         # joint step stays on the delay–Doppler ridge
         shrink = min(1.0, 0.5 / fs / max(abs(step[0]), 1e-300))
@@ -477,20 +429,31 @@ def fit_reference(
 
     def best_t(eps):
         ta = ta0 - g * (eps - eps0)  # along the delay–Doppler ridge
-        for _ in range(3):
+        for _ in range(2):
             ta, _ = gauss_newton(ta, eps, free_eps=False)
         return ta
 
     # profile likelihood over ε, by dichotomy (paper 002's bank, refined); t_a maximised for each ε
     limit = 1.05 * eps_max
     eps = dichotomy_max(
-        lambda e: corr(best_t(e), e), max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=1e-9
+        lambda e: corr(best_t(e), e), max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=search_eps / 32
     )
     ta = best_t(eps)
-    for _ in range(2):  # joint polish of what the dichotomy's tolerance left, kept only if it improves the fit
+    # joint Gauss–Newton polish of what the dichotomy's tolerance left (kept only while it improves the fit)
+    best = corr(ta, eps)
+    for _ in range(8):
         ta1, eps1 = gauss_newton(ta, eps, free_eps=True)
-        if corr(ta1, eps1) > corr(ta, eps):
-            ta, eps = ta1, eps1
+        for shrink in (1.0, 0.5, 0.25, 0.125):  # backtracking: the ridge makes full steps overshoot at times
+            ta2, eps2 = ta + shrink * (ta1 - ta), float(np.clip(eps + shrink * (eps1 - eps), -limit, limit))
+            c2 = corr(ta2, eps2)
+            if c2 > best:
+                break
+        if c2 <= best:
+            break
+        moved = abs(ta2 - ta) * fs
+        ta, eps, best = ta2, eps2, c2
+        if moved < 1e-6:  # a millionth of a sample: converged
+            break
     q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
     eq = float(np.real(np.vdot(q, q)))
     gain = np.vdot(q, x) / eq
@@ -675,7 +638,8 @@ class ReferenceReceiver:
             for rep in self.replicas
         ]
         self.channels = [_Channel(self.plan, proto) for _ in range(n_channels)]
-        self.chunk = int(4 * max(d.length for d in proto) + 2 * self.plan.fs_bb)
+        # scan in chunks of several seconds: each scan also re-reads the noise context and a ping's length
+        self.chunk = int(4 * max(d.length for d in proto) + 8 * self.plan.fs_bb)
         self.keep = int(max(d.length + d.window + d.context for d in proto) + 1.2 * (_NOISE_GAP_S + _NOISE_WINDOW_S) * self.plan.fs_bb)
 
     def _process(self, ch: _Channel, index: int, *, final: bool) -> list[_Found]:

@@ -222,34 +222,27 @@ _PN_SPAN = 8
 def _window(ref: ReferenceWaveform, u: np.ndarray) -> np.ndarray:
     """Amplitude window on u = t/T ∈ [0, 1] (0 outside)."""
     inside = (u >= 0) & (u <= 1)
-    if ref.window == "rect" or (ref.window == "tukey" and ref.taper == 0):
-        w = np.ones_like(u)
-    elif ref.window == "hann":
-        w = np.sin(np.pi * u) ** 2
-    else:
-        a = ref.taper
-        w = np.ones_like(u)
-        edge = np.minimum(u, 1 - u)
-        ramp = edge < a / 2
-        w[ramp] = 0.5 * (1 - np.cos(2 * np.pi * edge[ramp] / a))
-    return np.where(inside, w, 0.0)
+    if ref.window == "hann":
+        return np.where(inside, np.sin(np.pi * u) ** 2, 0.0)
+    if ref.window == "rect" or ref.taper == 0:
+        return inside.astype(float)
+    a = ref.taper
+    edge = np.minimum(u, 1 - u)
+    ramp = 0.5 * (1 - np.cos(2 * np.pi * np.minimum(edge, a / 2) / a))
+    return np.where(inside, ramp, 0.0)
 
 
 def _window_derivative(ref: ReferenceWaveform, u: np.ndarray) -> np.ndarray:
     """dw/du of :func:`_window`."""
     inside = (u >= 0) & (u <= 1)
-    if ref.window == "rect" or (ref.window == "tukey" and ref.taper == 0):
-        d = np.zeros_like(u)
-    elif ref.window == "hann":
-        d = np.pi * np.sin(2 * np.pi * u)
-    else:
-        a = ref.taper
-        d = np.zeros_like(u)
-        edge = np.minimum(u, 1 - u)
-        sign = np.where(u < 0.5, 1.0, -1.0)
-        ramp = edge < a / 2
-        d[ramp] = sign[ramp] * np.pi / a * np.sin(2 * np.pi * edge[ramp] / a)
-    return np.where(inside, d, 0.0)
+    if ref.window == "hann":
+        return np.where(inside, np.pi * np.sin(2 * np.pi * u), 0.0)
+    if ref.window == "rect" or ref.taper == 0:
+        return np.zeros_like(u)
+    a = ref.taper
+    edge = np.minimum(u, 1 - u)
+    slope = np.pi / a * np.sin(2 * np.pi * edge / a) * np.where(u < 0.5, 1.0, -1.0)
+    return np.where(inside & (edge < a / 2), slope, 0.0)
 
 
 def hfm_coupling_s(ref: ReferenceWaveform, eps) -> np.ndarray:
@@ -346,6 +339,14 @@ class Replica:
         """q of :meth:`scaled` and ∂q/∂u (u = (1 + ε)(t − t_a)): ∂q/∂t_a = −(1 + ε)∂q/∂u, ∂q/∂ε = (t − t_a)∂q/∂u."""
         t = np.asarray(t_s, dtype=float)
         u = (1 + eps) * (t - t_arrival_s)
+        ref = self.reference
+        if self._table is None:
+            # chirps: one phase evaluation for both (s_a' = (w' + j2π f w) e^{jφ})
+            T = ref.duration_s
+            phase, f = _chirp_phase(ref, np.clip(u, 0, T))
+            rot = np.exp(1j * (phase - 2 * np.pi * carrier_hz * t))
+            w, dw = _window(ref, u / T), _window_derivative(ref, u / T) / T
+            return w * rot, (dw + 2j * np.pi * f * w) * rot
         rot = np.exp(2j * np.pi * (self.centre_hz * u - carrier_hz * t))
         b = self.envelope(u)
         return b * rot, (self.derivative(u) + 2j * np.pi * self.centre_hz * b) * rot
