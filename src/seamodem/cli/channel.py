@@ -25,6 +25,13 @@ def add_parser(sub) -> None:
     p.add_argument("--scenario", required=True, metavar="S.toml", help="scenario file")
     p.add_argument("-o", "--output", required=True, metavar="OUT.wav", help="output WAV; the sidecar is OUT.json")
     p.add_argument("--seed", type=int, help="override the scenario's seed")
+    p.add_argument(
+        "--array",
+        metavar="SPEC",
+        help="a hydrophone array on the vehicle (geometry scenarios): tetra[:APERTURE_M], circleN[:APERTURE_M] or "
+        "a TOML/JSON file with an [array] table; OUT.wav gets one channel per element and the truth each path's "
+        "azimuth/elevation (see docs/array.md)",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(run=run)
 
@@ -45,6 +52,18 @@ def run(args: argparse.Namespace) -> int:
             raise SeamodemError(f"--seed: must be >= 0, got {args.seed}")
         scenario = replace(scenario, seed=args.seed)
     progress = False if args.quiet else None
+    if args.array is not None:
+        from ..channel.array import load_array, simulate_array_file
+
+        array = load_array(args.array)
+        if scenario.mode != "geometry":
+            raise SeamodemError(f"array: needs a geometry scenario (paths with directions), got mode {scenario.mode!r}")
+        side = simulate_array_file(args.input, scenario, array, out, command=command_line())
+        if not args.quiet:
+            print(f"wrote {out} ({side['recording']['duration_s']:.2f} s, {array.n_elements} channels, "
+                  f"{len(side['channel']['paths'])} paths) and {out.with_suffix('.json')} with the truth of "
+                  f"{len(side['truth'])} frames (directions per path)")
+        return 0
     if scenario.mode == "replay":
         side = replay_file(args.input, scenario, out, command=command_line(), progress=progress)
     else:

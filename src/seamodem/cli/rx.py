@@ -57,6 +57,8 @@ def add_parser(sub) -> None:
         help="two-way ranging: the beacon's reply delay [s]; emission times are then the vehicle's polls",
     )
     p.add_argument("--channel", type=int, help="channel of a multichannel recording, numbered from 0")
+    p.add_argument("--array", metavar="SPEC", help="all channels as a hydrophone array (as seamodem channel --array): "
+                   "direction of arrival per frame, combined decoding (docs/array.md)")
     p.add_argument("--v-max", type=float, default=5.0, metavar="M/S", help="largest |v_r| searched (default 5 m/s)")
     p.add_argument(
         "--false-alarms-per-hour",
@@ -194,7 +196,7 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
     from ..io.wav import wav_channel
     from ..receive.settings import ReceiverSettings
 
-    info, _ = wav_channel(recording, channel=args.channel)
+    info, _ = wav_channel(recording, channel=0 if args.array else args.channel)
     sidecar = _sidecar_for(args, recording)
     own_sidecar = sidecar is not None and not args.config
     config = config_from_args(args, config_file=str(sidecar_path(recording)) if own_sidecar else None)
@@ -274,6 +276,8 @@ def run(args: argparse.Namespace) -> int:
     out = check_writable(args.output)
     if out.suffix.lower() not in (".csv", ".jsonl"):
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+    if batch and args.array:
+        raise SeamodemError("array: a hydrophone array is received from a single recording (give one file)")
     if batch and args.plot:
         raise SeamodemError("plot: figures are drawn for a single recording only (drop --plot, or give one file)")
     if args.workers is not None and args.workers < 1:
@@ -307,8 +311,12 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
             on_frame=on_frame,
             progress=False if args.quiet else None,
         )
+        if args.array:  # the generator above is never started
+            from ._array import array_header, array_records
+
+            records = array_records(args, inputs)
         counted = _Counted(records)
-        n = write_measurements(out, counted, _header(args, [inputs], batch=False))
+        n = write_measurements(out, counted, _header(args, [inputs], batch=False) | array_header(args))
         _warn_unmatched(counted.unmatched)
     if not args.quiet:
         print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {inputs.settings.sound_speed_mps:g} m/s)"

@@ -57,13 +57,17 @@ __all__ = [
     "combine_channels",
     "receive_array",
     "calibrate_array",
+    "receive_array_file",
     "unit_vector",
 ]
 
 #: the correlation window extends this far beyond the pilot on each side [s]
-WINDOW_MARGIN_S = 0.002
+WINDOW_MARGIN_S = 0.007
 #: noise is measured over this window, ending this long before the frame start [s]
 NOISE_SEGMENT_S, NOISE_GAP_S = 0.03, 0.001
+#: echoes are looked for up to ECHO_SEARCH_S after the direct path, at most MAX_ECHOES per channel, while
+#: their correlation exceeds ECHO_FRACTION of the direct path's (the pilot's sidelobes are modelled, not searched)
+ECHO_SEARCH_S, MAX_ECHOES, ECHO_FRACTION = 0.006, 4, 0.05
 #: Gauss–Newton iterations at most, and the lag change [s] under which they stop
 MAX_ITERATIONS, LAG_TOLERANCE_S = 8, 1e-9
 
@@ -97,12 +101,36 @@ class ArrayCorrelation:
         Variance of c_k(δ) from noise alone (from the noise before the frame).
     t_arrival_s : float
         The reference arrival t_a: lag 0 [s].
+    kernel : numpy.ndarray, shape (n_bins,)
+        |R[m]|² / N: a path of amplitude a at lag δ adds a·kernel·e^{−j2π f δ} to a channel's spectrum.
+    n_fft : int
+        Window length N (samples).
     """
 
     spectra: np.ndarray
     freqs_hz: np.ndarray
     noise_var: np.ndarray
     t_arrival_s: float
+    kernel: np.ndarray
+    n_fft: int
+
+    @property
+    def energy(self) -> float:
+        """c(0) of a unit path at lag 0: Σ kernel."""
+        return float(np.sum(self.kernel))
+
+    def without(self, lags_s: np.ndarray, amplitudes: np.ndarray) -> ArrayCorrelation:
+        """The correlations with paths (n_channels, n_paths) of those lags and amplitudes removed."""
+        lags = np.atleast_2d(np.asarray(lags_s, float).T).T
+        amps = np.atleast_2d(np.asarray(amplitudes, complex).T).T
+        model = np.einsum("kp,kpm->km", amps, np.exp(-2j * np.pi * lags[:, :, None] * self.freqs_hz[None, None, :]))
+        return dataclasses.replace(self, spectra=self.spectra - model * self.kernel[None, :])
+
+    def on_sample_grid(self, fs: float) -> np.ndarray:
+        """c_k at lags i/fs, i = 0 … N−1 (circular: the last ones are negative lags), shape (n_channels, N)."""
+        full = np.zeros((self.spectra.shape[0], self.n_fft), complex)
+        full[:, np.rint(self.freqs_hz * self.n_fft / fs).astype(int)] = self.spectra
+        return np.fft.ifft(full, axis=1) * self.n_fft
 
     def at(self, lags_s: np.ndarray) -> np.ndarray:
         """c_k(δ_k) for one lag per channel (shape (n_channels,)) or a grid (n_channels, n_lags)."""
@@ -185,7 +213,7 @@ def array_correlation(
     if complex_gains is not None:
         psd = psd / np.abs(np.asarray(complex_gains))[:, None] ** 2
     noise_var = 4.0 / n * np.sum(np.abs(R)[None, :] ** 2 * psd, axis=1)
-    return ArrayCorrelation(spectra, freqs, noise_var, float(t_arrival_s))
+    return ArrayCorrelation(spectra, freqs, noise_var, float(t_arrival_s), np.abs(R) ** 2 / n, n)
 
 
 @dataclass(frozen=True)
@@ -212,6 +240,8 @@ class DoaEstimate:
         Weighted misfit of the fine lags (n_channels − 3 degrees of freedom).
     coarse_azimuth_rad, coarse_elevation_rad : float
         The wideband (step 1) estimate.
+    n_echoes : int
+        Later paths removed per channel before the final fit (step 2b).
     """
 
     azimuth_rad: float
@@ -226,6 +256,7 @@ class DoaEstimate:
     chi2: float
     coarse_azimuth_rad: float
     coarse_elevation_rad: float
+    n_echoes: int = 0
 
 
 def _check_positions(positions_m: np.ndarray) -> np.ndarray:
@@ -305,20 +336,15 @@ def estimate_doa(
     w = sol[1:]
     az0, el0 = math.atan2(w[1], w[0]), math.asin(float(np.clip(w[2] / max(np.linalg.norm(w), 1e-300), -1, 1)))
     theta = np.array([float(np.mean(coarse + p @ unit_vector(az0, el0) / c)), az0, el0])
-        # step 2: fine lags from the carrier phase at the plane-wave lags, Gauss-Newton
-    for _ in range(MAX_ITERATIONS):
-        lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
-        amp = corr.at(lags)
-        ref = np.sum(amp * np.abs(amp))  # common phase, weighted towards the strong channels
-        fine = lags - np.angle(amp * np.conj(ref)) / (2 * np.pi * f0)
-        snr = _snr(amp, corr.noise_var)
-        wts = 2.0 * snr * (2 * np.pi * f0) ** 2
-        J = _jacobian(p, theta[1], theta[2], c)
-        step = np.linalg.solve(J.T @ (wts[:, None] * J), J.T @ (wts * (fine - lags)))
-        theta = theta + step
-        theta[2] = float(np.clip(theta[2], -0.5 * np.pi, 0.5 * np.pi))
-        if np.max(np.abs(J @ step)) < LAG_TOLERANCE_S:
-            break
+    theta = _fit_plane_wave(corr, p, theta, c, f0)
+    # step 2b: echoes resolved from the direct path (> 3/4 symbol later) are fitted per channel and removed,
+    # so that their pilot sidelobes do not pull the direct path's phases; then the fit again
+    lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
+    echo_lags, echo_amps = _echoes(corr, lags, corr.at(lags) / corr.energy, fs=fs_of(corr),
+                                   after_s=0.75 / config.symbol_rate_hz)
+    if echo_lags.size:
+        corr = corr.without(echo_lags, echo_amps)
+        theta = _fit_plane_wave(corr, p, theta, c, f0)
     lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
     amp = corr.at(lags)
     ref = np.sum(amp * np.abs(amp))
@@ -347,7 +373,65 @@ def estimate_doa(
         chi2=chi2,
         coarse_azimuth_rad=az0,
         coarse_elevation_rad=el0,
+        n_echoes=int(echo_lags.shape[1]) if echo_lags.size else 0,
     )
+
+
+def fs_of(corr: ArrayCorrelation) -> float:
+    """Sample rate of the correlation window [Hz] (bin spacing × N)."""
+    return float(corr.freqs_hz[1] - corr.freqs_hz[0]) * corr.n_fft
+
+
+def _echoes(corr: ArrayCorrelation, direct_lags: np.ndarray, direct_amps: np.ndarray, *, fs: float,
+            after_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per channel, the strongest later paths of the residual (direct path removed): lags and amplitudes
+    (n_channels, n_echoes), greedy (CLEAN): the peak, refined by a parabola on |c| and its amplitude c/E,
+    removed, and again, while above ECHO_FRACTION of the direct path and 4.5 σ of noise."""
+    res = corr.without(direct_lags, direct_amps)
+    n_ch = corr.spectra.shape[0]
+    lags = np.zeros((n_ch, MAX_ECHOES))
+    amps = np.zeros((n_ch, MAX_ECHOES), complex)
+    found = 0
+    for j in range(MAX_ECHOES):
+        grid = res.on_sample_grid(fs)
+        i_lo = int(math.ceil((np.max(direct_lags) + after_s) * fs))
+        i_hi = int(math.floor((np.min(direct_lags) + ECHO_SEARCH_S) * fs))
+        if i_hi <= i_lo + 2:
+            break
+        seg = np.abs(grid[:, i_lo:i_hi])
+        i = np.clip(np.argmax(seg, axis=1), 1, seg.shape[1] - 2)
+        a, b, cc = (seg[np.arange(n_ch), i + d] for d in (-1, 0, 1))
+        den = a - 2 * b + cc
+        frac = np.where(den < 0, 0.5 * (a - cc) / np.where(den < 0, den, -1.0), 0.0)
+        lag = (i_lo + i + frac) / fs
+        c_val = res.at(lag)
+        strong = (np.abs(c_val) > ECHO_FRACTION * np.abs(direct_amps) * corr.energy) & (np.abs(c_val) ** 2 > 20 * corr.noise_var)
+        if not np.any(strong):
+            break
+        amp = np.where(strong, c_val / corr.energy, 0.0)
+        lags[:, j], amps[:, j] = lag, amp
+        res = res.without(lag, amp)
+        found = j + 1
+    return lags[:, :found], amps[:, :found]
+
+
+def _fit_plane_wave(corr: ArrayCorrelation, p: np.ndarray, theta: np.ndarray, c: float, f0: float) -> np.ndarray:
+    """Step 2: fine lags from the carrier phase at the plane-wave lags, weighted Gauss–Newton on (t0, az, el)."""
+    theta = np.array(theta, float)
+    for _ in range(MAX_ITERATIONS):
+        lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
+        amp = corr.at(lags)
+        ref = np.sum(amp * np.abs(amp))  # common phase, weighted towards the strong channels
+        fine = lags - np.angle(amp * np.conj(ref)) / (2 * np.pi * f0)
+        snr = _snr(amp, corr.noise_var)
+        wts = 2.0 * snr * (2 * np.pi * f0) ** 2
+        J = _jacobian(p, theta[1], theta[2], c)
+        step = np.linalg.solve(J.T @ (wts[:, None] * J), J.T @ (wts * (fine - lags)))
+        theta = theta + step
+        theta[2] = float(np.clip(theta[2], -0.5 * np.pi, 0.5 * np.pi))
+        if np.max(np.abs(J @ step)) < LAG_TOLERANCE_S:
+            break
+    return theta
 
 
 def combine_channels(
@@ -405,8 +489,9 @@ def receive_array(
     3. ``combine``: maximal-ratio combining of the frame (module docstring)
        spliced into the reference channel, and the single-hydrophone
        receiver run again on it (with the ``settings``' decoding): the
-       records' range, Doppler, SNR and payload come from the combined
-       channels. Otherwise they are the reference channel's.
+       records' range (to the array's body origin), Doppler, SNR and payload
+       come from the combined channels. Otherwise they are the reference
+       channel's (range to that element).
 
     Parameters
     ----------
@@ -458,7 +543,8 @@ def receive_array(
             w = np.conj(d.amplitudes) / noise
             ref_var = noise[reference_channel]
             w = w * math.sqrt(ref_var / np.sum(np.abs(w) ** 2 * noise))  # combined noise level = the reference's
-            beam = combine_channels(x[i0:i1], fs, d.lags_s, w, complex_gains=complex_gains)
+            # each channel to the body origin's time (lags − t0 = −p·u/c): the combined frame's range is the origin's
+            beam = combine_channels(x[i0:i1], fs, d.lags_s - d.t0_s, w, complex_gains=complex_gains)
             ramp = np.ones(i1 - i0)
             nr = min(round(COMBINE_RAMP_S * fs), (i1 - i0) // 2)
             edge = np.sin(0.5 * np.pi * (np.arange(nr) + 0.5) / nr)  # power-preserving cross-fade (independent noises)
@@ -542,3 +628,37 @@ def calibrate_array(
         total += weight
     g = acc / total
     return 20.0 * np.log10(np.abs(g)), np.angle(g)
+
+
+def receive_array_file(
+    path,
+    config: FrameConfig,
+    positions_m: np.ndarray,
+    *,
+    emissions: Emissions,
+    settings: ReceiverSettings | None = None,
+    complex_gains: np.ndarray | None = None,
+    pilot: np.ndarray | None = None,
+    payloads=None,
+) -> list[MeasurementRecord]:
+    """:func:`receive_array` on a multichannel audio file (one channel per element, read whole).
+
+    Raises
+    ------
+    InputFileError
+        Unreadable file, or fewer channels than elements.
+    """
+    import soundfile
+
+    from ..io.wav import wav_info
+
+    info = wav_info(path)
+    n_el = np.asarray(positions_m).shape[0]
+    if info.channels != n_el:
+        raise InputFileError(f"{path}: has {info.channels} channel(s), the array {n_el} elements")
+    x, fs = soundfile.read(str(path), dtype="float64", always_2d=True)
+    if not np.all(np.isfinite(x)):
+        raise InputFileError(f"{path}: holds NaN or infinite samples")
+    records, _ = receive_array(x, float(fs), config, positions_m, emissions=emissions, settings=settings,
+                               complex_gains=complex_gains, pilot=pilot, payloads=payloads)
+    return records
