@@ -17,6 +17,10 @@ At step k (t = k·Δt), with standard normals n in :data:`IMU_NOISE_COLUMNS` ord
 - accelerometer: a + σ_a n_a,k, a = (v_k − v_{k−1}) / Δt the speed change the
   vehicle made (its speed limits included).
 
+numba's cache does not see a change of this file from the kernels that call it
+(``_kernels.mission_kernel``): after editing it, delete the ``*.nbi``/``*.nbc``
+files under ``navigation/__pycache__``.
+
 Examples
 --------
 >>> import numpy as np
