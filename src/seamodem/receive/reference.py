@@ -366,6 +366,106 @@ class ReferenceFit:
     ridge_slope_s: float = 0.0
 
 
+#: echoes are sought this long after the direct path's end [s]
+ECHO_WINDOW_S = 0.03
+#: most echoes fitted beside the direct path
+MAX_ECHOES = 2
+#: an echo is fitted when its residual correlation exceeds this many times the noise (|c|²/(σ² E_q))
+ECHO_Z = 30.0
+
+
+class _PathFitter:
+    """Maximum-likelihood (t_a, ε) of one path of a reference in a baseband segment (x[n] at t[n])."""
+
+    def __init__(self, replica: Replica, t: np.ndarray, carrier_hz: float, fs: float, ridge_slope_s: float, limit: float):
+        self.replica, self.t, self.carrier_hz, self.fs = replica, t, carrier_hz, fs
+        self.g, self.limit = ridge_slope_s, limit
+
+    def _support(self, ta, eps) -> slice:
+        """Samples where the replica starting at t_a is non-zero (the rest adds nothing to any sum)."""
+        lo = int(math.floor((ta - self.t[0]) * self.fs)) - 1
+        hi = int(math.ceil((ta + self.replica.duration_s / (1 + eps) - self.t[0]) * self.fs)) + 2
+        return slice(max(lo, 0), max(min(hi, len(self.t)), 0))
+
+    def corr(self, x, ta, eps) -> float:
+        """|⟨q, x⟩|/‖q‖: the likelihood with A unknown (‖q‖ varies as 1/√(1 + ε); left out, it biases ε along the ridge)."""
+        k = self._support(ta, eps)
+        q = self.replica.scaled(self.t[k], t_arrival_s=ta, eps=eps, carrier_hz=self.carrier_hz)
+        return abs(np.vdot(q, x[k])) / math.sqrt(max(np.real(np.vdot(q, q)), np.finfo(float).tiny))
+
+    def gauss_newton(self, x, ta, eps, *, free_eps: bool):
+        """One Gauss–Newton step of the fit x ≈ A q(t_a, ε) (A complex, t_a and ε real)."""
+        k = self._support(ta, eps)
+        t, fs, x = self.t[k], self.fs, x[k]
+        q, dq = self.replica.scaled_with_derivative(t, t_arrival_s=ta, eps=eps, carrier_hz=self.carrier_hz)
+        a = np.vdot(q, x) / max(np.real(np.vdot(q, q)), np.finfo(float).tiny)
+        cols = [-(1 + eps) * a * dq] + ([(t - ta) * a * dq] if free_eps else []) + [q, 1j * q]
+        m = np.stack(cols)
+        resid = x - a * q
+        # real least squares on (Re, Im) by its normal equations: Re(M Mᴴ) step = Re(M residual*)
+        step = np.linalg.solve(np.real(m @ np.conj(m).T), np.real(np.conj(m) @ resid))
+        # never jump beyond the main lobe, where the linearisation holds; shrink (t_a, ε) together so that a
+        # joint step stays on the delay–Doppler ridge
+        shrink = min(1.0, 0.5 / fs / max(abs(step[0]), 1e-300))
+        return ta + shrink * step[0], eps + (shrink * step[1] if free_eps else 0.0)
+
+    def fit(self, x, ta0: float, eps0: float, search_eps: float, *, grid: bool) -> tuple[float, float]:
+        """ε by dichotomy on the profile likelihood (t_a by Gauss–Newton for each ε), then a joint polish.
+
+        ``search_eps`` 0: the joint polish alone (a start already near the optimum: echoes, refits).
+        """
+        fs, g, limit = self.fs, self.g, self.limit
+        if grid:  # a coarse lag is within half a sample: start from the best of a fine grid around it
+            cand = ta0 + np.linspace(-1.0, 1.0, 9) / fs
+            ta0 = float(cand[int(np.argmax([self.corr(x, tg, eps0) for tg in cand]))])
+
+        def best_t(eps):
+            ta = ta0 - g * (eps - eps0)  # along the delay–Doppler ridge
+            for _ in range(2):
+                ta, _ = self.gauss_newton(x, ta, eps, free_eps=False)
+            return ta
+
+        # profile likelihood over ε, by dichotomy (paper 002's bank, refined); t_a maximised for each ε
+        eps = eps0
+        if search_eps:
+            eps = dichotomy_max(
+                lambda e: self.corr(x, best_t(e), e),
+                max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=search_eps / 32,
+            )
+        ta = best_t(eps)
+        # joint Gauss–Newton polish of what the dichotomy's tolerance left (kept only while it improves the fit)
+        best = self.corr(x, ta, eps)
+        for _ in range(8):
+            ta1, eps1 = self.gauss_newton(x, ta, eps, free_eps=True)
+            for shrink in (1.0, 0.5, 0.25, 0.125):  # backtracking: the ridge makes full steps overshoot at times
+                ta2, eps2 = ta + shrink * (ta1 - ta), float(np.clip(eps + shrink * (eps1 - eps), -limit, limit))
+                c2 = self.corr(x, ta2, eps2)
+                if c2 > best:
+                    break
+            if c2 <= best:
+                break
+            moved = abs(ta2 - ta) * fs
+            ta, eps, best = ta2, eps2, c2
+            if moved < 1e-3:  # a thousandth of a sample (≈ 0.1 µs, a tenth of the best CRLB here): converged
+                break
+        return float(ta), float(eps)
+
+    def find_echo(self, resid, ta: float, eps: float, noise: float) -> float | None:
+        """Arrival of the strongest later path in the residual, if significant (|c|²/(σ² E_q) ≥ ECHO_Z)."""
+        fs = self.fs
+        p = _replica_samples(self.replica, fs, self.carrier_hz, eps)
+        n = scipy.fft.next_fast_len(len(resid) + len(p))
+        c = scipy.fft.ifft(scipy.fft.fft(resid, n) * np.conj(scipy.fft.fft(p, n)))[: len(resid)]
+        lags = self.t[0] + np.arange(len(resid)) / fs
+        # beyond the direct path's main lobe, within the window after it
+        ok = (lags > ta + 1.5 / self.replica.reference.bandwidth_hz) & (lags < ta + ECHO_WINDOW_S + 0.5 * self.replica.duration_s)
+        if not np.any(ok):
+            return None
+        z = np.where(ok, np.abs(c) ** 2, 0.0) / (noise * float(np.sum(np.abs(p) ** 2)))
+        k = int(np.argmax(z))
+        return float(lags[k]) if z[k] >= ECHO_Z else None
+
+
 def fit_reference(
     r: np.ndarray,
     fs: float,
@@ -399,61 +499,43 @@ def fit_reference(
     g = bound.ridge_slope_s
     dur = replica.duration_s
     lo = max(0, int(math.floor((detection.t_start_s - 2 / fs - t0_s) * fs)))
-    hi = min(len(r), int(math.ceil((detection.t_start_s + dur * 1.01 + 2 / fs - t0_s) * fs)) + 1)
+    hi = min(len(r), int(math.ceil((detection.t_start_s + dur * 1.01 + ECHO_WINDOW_S + 2 / fs - t0_s) * fs)) + 1)
     x = r[lo:hi]
     t = t0_s + np.arange(lo, hi) / fs
-
-    def corr(ta, eps):
-        """|⟨q, x⟩|/‖q‖: the likelihood with A unknown (‖q‖ varies as 1/√(1 + ε); left out, it biases ε along the ridge)."""
-        q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
-        return abs(np.vdot(q, x)) / math.sqrt(max(np.real(np.vdot(q, q)), np.finfo(float).tiny))
-
-    def gauss_newton(ta, eps, *, free_eps: bool):
-        """One Gauss–Newton step of the ML fit x ≈ A q(t_a, ε) (A complex, t_a and ε real)."""
-        q, dq = replica.scaled_with_derivative(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
-        a = np.vdot(q, x) / max(np.real(np.vdot(q, q)), np.finfo(float).tiny)
-        cols = [-(1 + eps) * a * dq] + ([(t - ta) * a * dq] if free_eps else []) + [q, 1j * q]
-        m = np.stack(cols)
-        resid = x - a * q
-        # real least squares on (Re, Im) by its normal equations: Re(M Mᴴ) step = Re(M residual*)
-        step = np.linalg.solve(np.real(m @ np.conj(m).T), np.real(np.conj(m) @ resid))
-        # never jump beyond the main lobe, where the linearisation holds; shrink (t_a, ε) together so that a
-        # joint step stays on the delay–Doppler ridge
-        shrink = min(1.0, 0.5 / fs / max(abs(step[0]), 1e-300))
-        return ta + shrink * step[0], eps + (shrink * step[1] if free_eps else 0.0)
-
-    eps0, ta0 = detection.eps, detection.t_start_s
-    # the coarse lag is within half a sample: start from the best of a fine grid around it
-    grid = ta0 + np.linspace(-1.0, 1.0, 9) / fs
-    ta0 = float(grid[int(np.argmax([corr(tg, eps0) for tg in grid]))])
-
-    def best_t(eps):
-        ta = ta0 - g * (eps - eps0)  # along the delay–Doppler ridge
-        for _ in range(2):
-            ta, _ = gauss_newton(ta, eps, free_eps=False)
-        return ta
-
-    # profile likelihood over ε, by dichotomy (paper 002's bank, refined); t_a maximised for each ε
     limit = 1.05 * eps_max
-    eps = dichotomy_max(
-        lambda e: corr(best_t(e), e), max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=search_eps / 32
-    )
-    ta = best_t(eps)
-    # joint Gauss–Newton polish of what the dichotomy's tolerance left (kept only while it improves the fit)
-    best = corr(ta, eps)
-    for _ in range(8):
-        ta1, eps1 = gauss_newton(ta, eps, free_eps=True)
-        for shrink in (1.0, 0.5, 0.25, 0.125):  # backtracking: the ridge makes full steps overshoot at times
-            ta2, eps2 = ta + shrink * (ta1 - ta), float(np.clip(eps + shrink * (eps1 - eps), -limit, limit))
-            c2 = corr(ta2, eps2)
-            if c2 > best:
+    path = _PathFitter(replica, t, carrier_hz, fs, g, limit)
+    ta, eps = path.fit(x, detection.t_start_s, detection.eps, search_eps, grid=True)
+    q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+    gain = np.vdot(q, x) / float(np.real(np.vdot(q, q)))
+    noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
+    echoes = []
+    if noise is not None:
+        # echoes overlapping the ping leak through the replica's sidelobes and pull the direct path along
+        # its delay–Doppler ridge: find them in the residual, then fit every path on the others' residual (SAGE)
+        resid = x - gain * q
+        for _ in range(MAX_ECHOES):
+            echo = path.find_echo(resid, ta, eps, noise)
+            if echo is None:
                 break
-        if c2 <= best:
-            break
-        moved = abs(ta2 - ta) * fs
-        ta, eps, best = ta2, eps2, c2
-        if moved < 1e-6:  # a millionth of a sample: converged
-            break
+            te, ee = path.fit(resid, echo, eps, 0.0, grid=True)
+            qe = replica.scaled(t, t_arrival_s=te, eps=ee, carrier_hz=carrier_hz)
+            ae = np.vdot(qe, resid) / float(np.real(np.vdot(qe, qe)))
+            echoes.append([te, ee, ae, qe])
+            resid = resid - ae * qe
+        for _ in range(3 if echoes else 0):
+            others = sum(e[2] * e[3] for e in echoes)
+            ta_before = ta
+            ta, eps = path.fit(x - others, ta, eps, 0.0, grid=False)
+            q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+            gain = np.vdot(q, x - others) / float(np.real(np.vdot(q, q)))
+            for k, e in enumerate(echoes):
+                rest = x - gain * q - sum(o[2] * o[3] for m, o in enumerate(echoes) if m != k)
+                te, ee = path.fit(rest, e[0], e[1], 0.0, grid=False)
+                qe = replica.scaled(t, t_arrival_s=te, eps=ee, carrier_hz=carrier_hz)
+                echoes[k] = [te, ee, np.vdot(qe, rest) / float(np.real(np.vdot(qe, qe))), qe]
+            if abs(ta - ta_before) * fs < 0.01:  # the direct path no longer moves: the paths are separated
+                break
+        x = x - sum(e[2] * e[3] for e in echoes) if echoes else x
     q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
     eq = float(np.real(np.vdot(q, q)))
     gain = np.vdot(q, x) / eq
