@@ -28,7 +28,7 @@ import numpy as np
 
 from seamodem.channel.scenario import parse_scenario
 from seamodem.channel.simulate import simulate
-from seamodem.receive.reference import ReferenceReceiver, keep_matching_reference, pair_up
+from seamodem.receive.reference import MIN_RHO, ReferenceReceiver, pair_up
 from seamodem.transmit.reference import (
     ReferenceWaveform,
     emission_times,
@@ -80,7 +80,7 @@ def through_channel(ref: ReferenceWaveform, snr_db: float, *, count: int, period
     return sim.output, sim.truth, em
 
 
-def receive(refs, y, *, fs=FS, false_alarms_per_hour=0.01, min_rho=0.1):
+def receive(refs, y, *, fs=FS, false_alarms_per_hour=0.01, min_rho=MIN_RHO):
     rx = ReferenceReceiver(refs, fs, sound_speed_mps=C, v_max_mps=5.0, false_alarms_per_hour=false_alarms_per_hour,
                            min_rho=min_rho)
     blocks = (y[i : i + (1 << 18)].reshape(-1, 1) for i in range(0, len(y), 1 << 18))
@@ -188,7 +188,7 @@ def false_alarm_table(quick: bool) -> list[str]:
              "| design rate [/h] | ρ test | detections | measured rate [/h] | measured / design |", "|---|---|---|---|---|"]
     y = rng.normal(0, 0.1, int(minutes * 60 * FS))
     for rate in (3600.0, 36000.0, 360000.0):
-        for rho in (0.0, 0.1):
+        for rho in (0.0, MIN_RHO):
             _, found = receive([ref], y, false_alarms_per_hour=rate, min_rho=rho)
             measured = len(found) / (minutes / 60)
             lines.append(f"| {rate:g} | {'on' if rho else 'off'} | {len(found)} | {measured:.0f} | {measured / rate:.3f} |")

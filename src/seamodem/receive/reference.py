@@ -70,6 +70,10 @@ __all__ = [
 
 #: a Doppler CRLB above this fraction of v_max/c means the ping cannot measure its Doppler (σ_ε is then v_max/c)
 DOPPLER_THRESHOLD = 0.1
+#: smallest normalised correlation of a detection: ≈ S/(S + N) in the baseband's band, so detection reaches
+#: in-band SNRs near −10 dB, while an impulse of k samples in a ping of N gives ρ ≈ k/N (≈ 0.02 for a 1 ms
+#: snap in a 50 ms ping); unlike the frame detector, a ping has no data of its own to reject
+MIN_RHO = 0.05
 #: noise level window before the arrival, after a gap [s]
 _NOISE_GAP_S, _NOISE_WINDOW_S = 0.005, 0.05
 
@@ -241,7 +245,7 @@ class ReferenceDetector:
         v_max_mps: float,
         sound_speed_mps: float,
         false_alarms_per_hour: float = 0.01,
-        min_rho: float = 0.1,
+        min_rho: float = MIN_RHO,
         first_path_fraction: float = 0.3,
         multipath_window_s: float = 0.03,
     ):
@@ -699,7 +703,7 @@ class ReferenceReceiver:
         v_max_mps: float = 5.0,
         false_alarms_per_hour: float = 0.01,
         replicas: list[Replica] | None = None,
-        min_rho: float = 0.1,
+        min_rho: float = MIN_RHO,
     ):
         from ..transmit.reference import reference_replica
 
