@@ -3,12 +3,11 @@
 import json
 import math
 
-import numpy as np
 import pandas as pd
 import pytest
 import soundfile
 
-from seamodem import BeaconSchedule, get_preset, write_beacon
+from seamodem import get_preset
 from seamodem.cli import main
 
 CFG = get_preset("jmse2024")
@@ -36,7 +35,9 @@ snr_db = 12.0
 @pytest.fixture(scope="module")
 def received(tmp_path_factory):
     d = tmp_path_factory.mktemp("array")
-    write_beacon(d / "beacon.wav", CFG, BeaconSchedule(count=2, period_s=1.0, start_s=0.1), progress=False)
+    # the commands of docs/array.md
+    assert main(["tx", "--preset", "jmse2024", "--count", "2", "--period", "1", "--start", "0.1",
+                 "-o", str(d / "beacon.wav"), "-q"]) == 0
     (d / "s.toml").write_text(SCENARIO)
     (d / "profile.toml").write_text('mode = "profile"\n[doppler]\ninitial_range_m = 100.0\n'
                                     'components = [{ kind = "constant", v_mps = 1.0 }]\n')

@@ -112,6 +112,9 @@ class ReceiverArray:
         Constant heading ψ [rad]; default: the direction of the horizontal velocity.
     pitch_rad, roll_rad : float
         Constant pitch θ and roll φ [rad].
+    position_sigma_m : float
+        What a receiver assumes of its nominal positions' error, per axis [m]
+        (widens its σ; the simulator ignores it).
     """
 
     element_positions_m: Any
@@ -121,6 +124,7 @@ class ReceiverArray:
     heading_rad: float | None = None
     pitch_rad: float = 0.0
     roll_rad: float = 0.0
+    position_sigma_m: float = 0.0
 
     def __post_init__(self):
         pos = _matrix("array.element_positions_m", self.element_positions_m, (3,))
@@ -138,6 +142,10 @@ class ReceiverArray:
             if v.shape[0] != n:
                 raise ConfigError(f"array.{name}", f"needs {n} values (one per element), got {v.shape[0]}")
             object.__setattr__(self, name, v)
+        if not (isinstance(self.position_sigma_m, (int, float)) and math.isfinite(self.position_sigma_m)
+                and self.position_sigma_m >= 0):
+            raise ConfigError("array.position_sigma_m", f"must be a number >= 0, got {self.position_sigma_m!r}")
+        object.__setattr__(self, "position_sigma_m", float(self.position_sigma_m))
         for name in ("heading_rad", "pitch_rad", "roll_rad"):
             value = getattr(self, name)
             if value is None and name == "heading_rad":
@@ -201,6 +209,7 @@ class ReceiverArray:
             "heading_rad": self.heading_rad,
             "pitch_rad": self.pitch_rad,
             "roll_rad": self.roll_rad,
+            "position_sigma_m": self.position_sigma_m,
             "axes": "body frame: x forward, y port, z up; R = Rz(heading) Ry(-pitch) Rx(roll)",
         }
 
@@ -208,7 +217,8 @@ class ReceiverArray:
     def from_dict(cls, d: dict[str, Any]) -> ReceiverArray:
         if not isinstance(d, dict):
             raise ConfigError("array", f"must be a table, got {d!r}")
-        known = ("element_positions_m", "position_errors_m", "gain_db", "phase_rad", "heading_rad", "pitch_rad", "roll_rad")
+        known = ("element_positions_m", "position_errors_m", "gain_db", "phase_rad", "heading_rad", "pitch_rad", "roll_rad",
+                 "position_sigma_m")
         for key in d:
             if key not in known and key != "axes":
                 raise ConfigError(f"array.{key}", f"unknown key (known: {', '.join(known)})")

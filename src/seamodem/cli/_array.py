@@ -18,7 +18,8 @@ def array_records(args: argparse.Namespace, inputs) -> list:
 
     array = _array(args)
     return receive_array_file(inputs.path, inputs.config, array.element_positions_m, emissions=inputs.emissions,
-                              settings=inputs.settings, complex_gains=array.complex_gains, pilot=inputs.pilot,
+                              settings=inputs.settings, complex_gains=array.complex_gains,
+                              position_sigma_m=array.position_sigma_m, pilot=inputs.pilot,
                               payloads=inputs.payloads)
 
 
