@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .inertial import _gated_acoustic, _predict, _update_heading
+from .inertial import _cartesian, _gated_acoustic, _predict, _to_internal, _update_heading
 from .vehicle import feedback_command, vehicle_step
 
 
@@ -31,7 +31,8 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         heading bias [rad]
     current : (2,) true water current [m/s]; range_scale : true range and v_r scale − 1
     bias_rate : true heading-bias drift rate [rad/s] (added to the random walk of ``sigmas[3]``)
-    z0, P0 : filter start (the position, speed and bias parts; the heading is set from the step-0 reading)
+    z0, P0 : Cartesian filter start (the position, speed and bias parts; the heading is set from the step-0
+        reading); converted to the filter's chart (``lay[4]``) inside
     lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations : the filter (see ``inertial``)
     sensors : (n + 1, 5) output: heading, gyro, accelerometer readings, range and v_r (NaN without a frame)
     """
@@ -44,6 +45,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     nis_out = np.full(n + 1, np.nan)
     z = z0.copy()
     P = P0.copy()
+    lay = lay.copy()  # lay[4], the current chart, changes along the mission
     zp = np.empty(m)
     F = np.empty((m, m))
     A = np.empty((m, m))
@@ -59,15 +61,17 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     bias = start_offsets[3]
     heading0 = psi + bias + sigmas[0] * noise[0, 0]
     z[2] = heading0 - z[4]  # P0 is the prior after this reading (InertialConfig.initial)
+    _to_internal(z, P, lay, beacon)  # z0, P0 come Cartesian
     sensors[0, 0] = heading0
     sensors[0, 1] = sensors[0, 2] = 0.0
     sensors[0, 3] = sensors[0, 4] = np.nan
-    estimate[0, 0], estimate[0, 1] = z[0], z[1]
+    ex, ey = _cartesian(z, lay, beacon)
+    estimate[0, 0], estimate[0, 1] = ex, ey
     truth[0, 0], truth[0, 1] = x, y
-    error[0] = np.sqrt((z[0] - x) ** 2 + (z[1] - y) ** 2)
+    error[0] = np.sqrt((ex - x) ** 2 + (ey - y) ** 2)
     gated_run = 0
     scale = 1.0 + range_scale
-    sx, sy, spsi, sv = (z[0], z[1], z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
+    sx, sy, spsi, sv = (ex, ey, z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
     omega, accel = feedback_command(sx, sy, spsi, sv, reference[0, 0], reference[0, 1], reference[0, 2],
                                     reference[0, 3], reference[0, 4], reference[0, 5], v_min, omega_max, accel_max)
     for k in range(1, n + 1):
@@ -82,7 +86,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         accel_m = accel_true + sigmas[2] * noise[k, 2]
         sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
         sensors[k, 3] = sensors[k, 4] = np.nan
-        _predict(z, P, lay, qd, omega_m, accel_m, dt, zp, F, A, Pp)
+        _predict(z, P, lay, beacon, qd, omega_m, accel_m, dt, zp, F, A, Pp)
         if k % com_every == 0:
             dx, dy = x - beacon[0], y - beacon[1]
             d_true = np.sqrt(dx * dx + dy * dy)
@@ -95,10 +99,11 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
                                                                gate, gate_reset_after, gated_run, iterations,
                                                                second_order, work, Hw)
         _update_heading(z, P, head_m, heading_var, ph)
-        estimate[k, 0], estimate[k, 1] = z[0], z[1]
+        ex, ey = _cartesian(z, lay, beacon)
+        estimate[k, 0], estimate[k, 1] = ex, ey
         truth[k, 0], truth[k, 1] = x, y
-        error[k] = np.sqrt((z[0] - x) ** 2 + (z[1] - y) ** 2)
-        sx, sy, spsi, sv = (z[0], z[1], z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
+        error[k] = np.sqrt((ex - x) ** 2 + (ey - y) ** 2)
+        sx, sy, spsi, sv = (ex, ey, z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
         omega, accel = feedback_command(sx, sy, spsi, sv, reference[k, 0], reference[k, 1], reference[k, 2],
                                         reference[k, 3], reference[k, 4], reference[k, 5], v_min, omega_max,
                                         accel_max)

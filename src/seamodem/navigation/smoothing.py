@@ -24,17 +24,24 @@ import numpy as np
 from numba import njit
 
 from ..errors import ConfigError
-from .inertial import FilterRun, _acoustic_model, _motion, _propagate_cov, _update_heading, _update_position, _wrap
+from .inertial import (FilterRun, _acoustic_model, _convert, _motion, _process_polar, _propagate_cov, _update_heading,
+                       _update_position, _wrap, to_cartesian)
 
 __all__ = ["SmoothedTrack", "batch_smooth", "fixed_lag_smooth"]
 
 
 class SmoothedTrack:
-    """States (N, n), covariances (N, n, n) and the number of Gauss–Newton iterations (batch) or the lag [s]."""
+    """A smoothed track: Cartesian ``states`` (N, n) and ``covariances`` (N, n, n), the filter's own
+    ``internal_states``/``internal_covariances`` (polar when the filter ran polar), and the number of
+    Gauss–Newton iterations (batch) or the lag [s]."""
 
-    def __init__(self, states, covariances, *, iterations=None, lag_s=None, converged=True):
-        self.states = states
-        self.covariances = covariances
+    def __init__(self, internal_states, internal_covariances, run: FilterRun, *, charts=None, iterations=None,
+                 lag_s=None, converged=True):
+        self.internal_states = internal_states
+        self.internal_covariances = internal_covariances
+        self.charts = run.charts if charts is None else charts
+        self.states, self.covariances = to_cartesian(internal_states, internal_covariances, self.charts,
+                                                     run.beacon_xy)
         self.iterations = iterations
         self.lag_s = lag_s
         self.converged = converged
@@ -65,11 +72,17 @@ def _rts(post, P_post, prior, P_prior, C):
 
 
 @njit(cache=True, nogil=True)
-def _linearized_pass(nominal, z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var,
+def _linearized_pass(nominal, z0, P0, lay, charts, qd, beacon, dt, omega, accel, has_heading, heading, heading_var,
                      use_frame, meas, meas_var, use_range, use_vr, has_fix, fix, fix_var, post, P_post, prior, P_prior,
                      F_all):
-    """Kalman filter of the model linearized about ``nominal`` (one Gauss–Newton step, forward half)."""
+    """Kalman filter of the model linearized about ``nominal`` (one Gauss–Newton step, forward half).
+
+    ``charts`` (N,) is the filter's chart per node (0 Cartesian, 1 polar): ``nominal[i]`` is in chart
+    ``charts[i]``; where the chart changes, the step's Jacobian carries the change of coordinates.
+    """
     N, n = nominal.shape
+    lay = lay.copy()
+    no_cov = np.zeros((n, n))
     z = z0.copy()
     P = P0.copy()
     fx = np.empty(n)
@@ -81,13 +94,17 @@ def _linearized_pass(nominal, z0, P0, lay, qd, beacon, dt, omega, accel, has_hea
     H = np.zeros((2, n))
     for i in range(N):
         if i > 0:
+            lay[4] = charts[i - 1]
             _motion(nominal[i - 1], lay, omega[i], accel[i], dt[i], fx, F)
+            _convert(fx, no_cov, lay, beacon, charts[i], F)
             for a in range(n):
                 acc = fx[a]
                 for b in range(n):
                     acc += F[a, b] * (z[b] - nominal[i - 1, b])
                 ph[a] = acc
             _propagate_cov(P, F, qd, dt[i], A, Pp)
+            lay[4] = charts[i]
+            _process_polar(Pp, nominal[i], lay, qd, dt[i])
             for a in range(n):
                 z[a] = ph[a]
                 for b in range(n):
@@ -96,6 +113,7 @@ def _linearized_pass(nominal, z0, P0, lay, qd, beacon, dt, omega, accel, has_hea
             for a in range(n):
                 for b in range(n):
                     F[a, b] = 1.0 if a == b else 0.0
+        lay[4] = charts[i]
         for a in range(n):
             prior[i, a] = z[a]
             for b in range(n):
@@ -126,7 +144,7 @@ def _linearized_pass(nominal, z0, P0, lay, qd, beacon, dt, omega, accel, has_hea
             _update_heading(z, P, nominal[i, 2] + nominal[i, 4] + _wrap(heading[i] - nominal[i, 2] - nominal[i, 4]),
                             heading_var[i], ph)
         if has_fix[i]:
-            _update_position(z, P, fix[i], fix_var[i], ph)
+            _update_position(z, P, lay, beacon, nominal[i], fix[i], fix_var[i], ph)
         for a in range(n):
             post[i, a] = z[a]
             for b in range(n):
@@ -137,7 +155,7 @@ def _used_frames(run: FilterRun) -> np.ndarray:
     return run.nodes.has_acoustic & (run.status != 2)
 
 
-def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6) -> SmoothedTrack:
+def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6, cartesian: bool = True) -> SmoothedTrack:
     """Maximum a posteriori track over the whole mission (iterated extended Kalman smoother).
 
     Parameters
@@ -163,10 +181,16 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6)
     if max_iterations < 1:
         raise ConfigError("max_iterations", f"must be >= 1, got {max_iterations!r}")
     nodes, cfg = run.nodes, run.config
-    N, n = run.states.shape
+    N, n = run.internal_states.shape
     use = _used_frames(run)
-    C = _rts_gains(run.states, run.covariances, run.prior_states, run.prior_covariances, run.transitions)
-    nominal, _ = _rts(run.states, run.covariances, run.prior_states, run.prior_covariances, C)
+    C = _rts_gains(run.internal_states, run.internal_covariances, run.prior_states, run.prior_covariances, run.transitions)
+    nominal, _ = _rts(run.internal_states, run.internal_covariances, run.prior_states, run.prior_covariances, C)
+    lay, charts, z0, P0 = cfg.layout, run.charts, run.internal_z0, run.internal_P0
+    if cartesian and np.any(charts):
+        nominal, _ = to_cartesian(nominal, np.zeros((N, 2, 2)), charts, run.beacon_xy)
+        z0, P0 = run.z0, run.P0
+        lay[3] = lay[4] = 0
+        charts = np.zeros(N, dtype=np.int8)
     post, P_post = np.empty((N, n)), np.empty((N, n, n))
     prior, P_prior, F = np.empty((N, n)), np.empty((N, n, n)), np.empty((N, n, n))
     use_range = True
@@ -174,8 +198,8 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6)
     it = 0
     Ps = None
     for it in range(1, max_iterations + 1):
-        _linearized_pass(nominal, run.z0, run.P0, cfg.layout, cfg.process_density, run.beacon_xy, nodes.dt_s,
-                         nodes.omega, nodes.accel, run.has_heading, nodes.heading, nodes.heading_var, use,
+        _linearized_pass(nominal, z0, P0, lay, charts, cfg.process_density, run.beacon_xy,
+                         nodes.dt_s, nodes.omega, nodes.accel, run.has_heading, nodes.heading, nodes.heading_var, use,
                          nodes.meas, nodes.meas_var, use_range, run.use_vr, nodes.has_fix, nodes.fix, nodes.fix_var, post,
                          P_post, prior, P_prior, F)
         C = _rts_gains(post, P_post, prior, P_prior, F)
@@ -185,7 +209,7 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6)
         if step < tol:
             converged = True
             break
-    return SmoothedTrack(nominal, Ps, iterations=it, converged=converged)
+    return SmoothedTrack(nominal, Ps, run, charts=charts, iterations=it, converged=converged)
 
 
 @njit(cache=True, nogil=True)
@@ -224,6 +248,6 @@ def fixed_lag_smooth(run: FilterRun, *, lag_s: float) -> SmoothedTrack:
         raise ConfigError("lag_s", f"must be > 0 s, got {lag_s!r}")
     t = run.nodes.t_s
     end = np.searchsorted(t, t + lag_s, side="right") - 1
-    C = _rts_gains(run.states, run.covariances, run.prior_states, run.prior_covariances, run.transitions)
-    xs, Ps = _fixed_lag(run.states, run.covariances, run.prior_states, run.prior_covariances, C, end)
-    return SmoothedTrack(xs, Ps, lag_s=float(lag_s))
+    C = _rts_gains(run.internal_states, run.internal_covariances, run.prior_states, run.prior_covariances, run.transitions)
+    xs, Ps = _fixed_lag(run.internal_states, run.internal_covariances, run.prior_states, run.prior_covariances, C, end)
+    return SmoothedTrack(xs, Ps, run, lag_s=float(lag_s))
