@@ -164,3 +164,36 @@ def test_pure_noise_gives_no_detection():
     x = rng.normal(0, 0.1, int(60 * FS))
     _, found = _run([parse_reference("lfm:19000-29000:0.05"), parse_reference("pn:24000:5000:7")], x)
     assert found == []
+
+
+def test_template_from_a_wav_and_a_mat_excerpt(tmp_path):
+    """A waveform known only as a recording (sinusoidal FM, 10–14 kHz, 80 ms), cut from a WAV and from a .mat."""
+    import scipy.io
+    import soundfile
+
+    dur = 0.08
+
+    def ping(u):
+        w = np.where((u >= 0) & (u <= dur), np.sin(np.pi * np.clip(u, 0, dur) / dur) ** 2, 0.0)
+        return w * np.cos(2 * np.pi * (12e3 * u + 1500 / (2 * np.pi * 25) * np.sin(2 * np.pi * 25 * u)))
+
+    lead = 0.2
+    t = np.arange(int((lead + dur + 0.2) * FS)) / FS
+    recording = ping(t - lead)
+    soundfile.write(tmp_path / "template.wav", recording, int(FS), subtype="FLOAT")
+    scipy.io.savemat(tmp_path / "template.mat", {"y": recording, "fs": FS})
+    rng = np.random.default_rng(2)
+    arrivals = _arrivals(rng, 6)
+    x = received(ping, fs=FS, duration_s=arrivals[-1] + 0.5, arrivals_s=arrivals, v_mps=0.8, ping_duration_s=dur)
+    x = add_noise(x, fs=FS, ping=ping, band_hz=(10e3, 14e3), ping_duration_s=dur, snr_db=15, rng=rng)
+    for name, extra in (("template.wav", {}), ("template.mat", {"mat_variable": "y"})):
+        # the excerpt starts with the ping: arrivals are those of its first sample
+        ref = ReferenceWaveform(kind="template", file=str(tmp_path / name), start_s=lead, stop_s=lead + dur,
+                                f_low_hz=10e3, f_high_hz=14e3, **extra)
+        _, found = _run([ref], x)
+        assert len(found) == len(arrivals)
+        t_hat = np.array([f.fit.t_arrival_s for f in found])
+        sigma = np.array([f.fit.sigma_t_s for f in found])
+        assert np.all(np.abs(t_hat - arrivals) < 4 * sigma) and np.all(sigma < 2e-5)
+        v = np.array([f.fit.eps * C for f in found])
+        assert np.all(np.abs(v - 0.8) < 4 * np.array([f.fit.sigma_eps * C for f in found]))

@@ -261,7 +261,9 @@ class ReferenceDetector:
         self.eta = z_threshold(false_alarms_per_hour, len(self.eps), self.fs)
         self.min_rho = float(min_rho)
         self.first_path_fraction = float(first_path_fraction)
-        self.window = max(1, int(round(multipath_window_s * self.fs)))
+        # the strongest path is sought over a ping's length too: a ping's own correlation sidelobes (a periodic
+        # template) can cross the threshold before its main peak, and must not pass for the first arrival
+        self.window = max(1, int(round((multipath_window_s + replica.duration_s) * self.fs)))
         self.half_lobe = max(1, int(math.ceil(self.fs / replica.reference.bandwidth_hz)))
         self.holdoff = max(1, int(replica.duration_s * (1 - 2 * eps_max) * self.fs))
         self.context = int(0.5 * self.fs)
