@@ -23,7 +23,8 @@ def run_example(name, out, *args):
 
 
 def test_every_example_is_tested():
-    tested = {"mission_demo.py", "write_waveforms.py", "decode_recording.py", "feed_estimator.py", "monte_carlo.py"}
+    tested = {"mission_demo.py", "write_waveforms.py", "decode_recording.py", "feed_estimator.py", "monte_carlo.py",
+              "array_demo.py"}  # array_demo.py: tests/array/test_array_example.py
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 

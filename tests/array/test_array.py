@@ -306,19 +306,23 @@ def test_single_frame_fix_recovers_the_geometry_and_its_covariance_is_calibrated
     from_el = single_frame_fix(slant, az, psi, b, elevation_rad=el, sigma_range_m=0.05, sigma_azimuth_rad=0.01,
                                sigma_heading_rad=0.02, sigma_elevation_rad=0.01)
     assert np.allclose([from_el.x_m, from_el.y_m, from_el.z_m], truth, atol=1e-9)
-    # Monte Carlo at array-grade angles (0.2° azimuth, 0.3° heading; first order holds: the curvature
-    # term ρσ² ≈ 6 mm is small beside the 5 cm radial σ): sample covariance vs first-order one, 2000 draws: ±12 %
-    sa, sp = np.radians(0.2), np.radians(0.3)
-    lin = single_frame_fix(slant, az, psi, b, z_m=truth[2], sigma_range_m=0.05, sigma_azimuth_rad=sa,
-                           sigma_heading_rad=sp, sigma_z_m=0.1)
-    pts = []
-    for _ in range(2000):
-        f = single_frame_fix(slant + 0.05 * rng.standard_normal(), az + sa * rng.standard_normal(),
-                             psi + sp * rng.standard_normal(), b, z_m=truth[2] + 0.1 * rng.standard_normal(),
-                             sigma_range_m=0.05, sigma_azimuth_rad=sa, sigma_heading_rad=sp, sigma_z_m=0.1)
-        pts.append([f.x_m, f.y_m])
-    emp = np.cov(np.array(pts).T)
-    assert np.allclose(np.linalg.eigvalsh(emp), np.linalg.eigvalsh(lin.covariance[:2, :2]), rtol=0.12)
+    # Monte Carlo, 2000 draws: sample covariance vs the fix's (first order + the second-order line-of-sight
+    # term), ±12 %, at array-grade angles (0.2°, 0.3°) and at a 1° heading (where the second-order term
+    # is 5 times the 5 cm range σ)
+    for sa, sp in ((np.radians(0.2), np.radians(0.3)), (np.radians(0.2), np.radians(1.0))):
+        lin = single_frame_fix(slant, az, psi, b, z_m=truth[2], sigma_range_m=0.05, sigma_azimuth_rad=sa,
+                               sigma_heading_rad=sp, sigma_z_m=0.1)
+        pts = []
+        for _ in range(2000):
+            f = single_frame_fix(slant + 0.05 * rng.standard_normal(), az + sa * rng.standard_normal(),
+                                 psi + sp * rng.standard_normal(), b, z_m=truth[2] + 0.1 * rng.standard_normal(),
+                                 sigma_range_m=0.05, sigma_azimuth_rad=sa, sigma_heading_rad=sp, sigma_z_m=0.1)
+            pts.append([f.x_m, f.y_m])
+        pts = np.array(pts)
+        emp = np.cov(pts.T) + np.outer(pts.mean(0) - truth[:2], pts.mean(0) - truth[:2])  # MSE matrix (bias in)
+        ev_emp, ev_fix = np.linalg.eigvalsh(emp), np.linalg.eigvalsh(lin.covariance[:2, :2])
+        assert ev_emp[1] == pytest.approx(ev_fix[1], rel=0.12)
+        assert 0.75 * ev_fix[0] <= ev_emp[0] <= 1.12 * ev_fix[0]  # the second-order term is 4/3 of bias² + var
 
 
 def test_single_frame_fix_bad_input():

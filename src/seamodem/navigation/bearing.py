@@ -159,7 +159,9 @@ def single_frame_fix(
     ρ = √(R² − (z_b − z)²), β = ψ + azimuth, (x, y) = (x_b − ρ cos β, y_b − ρ sin β).
     The covariance is J Σ Jᵀ with J the Jacobian of (x, y, z) with respect to
     (R, azimuth, ψ, z or elevation), by central differences, and Σ the inputs'
-    variances. Cross-range error ≈ ρ·√(σ_az² + σ_ψ²): a heading bias shifts
+    variances, plus (ρσ_β²)² along the line of sight (σ_β² = σ_az² + σ_ψ²): the
+    second-order shortening ρ(1 − cos δ), which a first-order covariance misses
+    and which dominates the radial error when the range is centimetric. Cross-range error ≈ ρ·√(σ_az² + σ_ψ²): a heading bias shifts
     the fix by ρ·bias, whatever the array's accuracy.
 
     Examples
@@ -192,4 +194,9 @@ def single_frame_fix(
     steps = np.array([1e-6 * max(range_m, 1.0), 1e-7, 1e-7, 1e-6 if z_m is not None else 1e-7])
     J = np.column_stack([(f(inputs + h * e) - f(inputs - h * e)) / (2 * h) for h, e in zip(steps, np.eye(4))])
     cov = J @ np.diag(sigmas**2) @ J.T
+    # second order: an angle error δ shortens the fix along the line of sight by ρ(1 − cos δ) ≈ ρδ²/2
+    # (mean ρσ²/2, std ρσ²/√2); at metres of cross-range it exceeds a centimetre range σ
+    var_beta = sigma_azimuth_rad**2 + sigma_heading_rad**2
+    u = np.array([math.cos(beta), math.sin(beta), 0.0])
+    cov = cov + (rho * var_beta) ** 2 * np.outer(u, u)
     return BearingFix(float(pos[0]), float(pos[1]), float(pos[2]), cov, float(rho), float(wrap_angle(beta)))
