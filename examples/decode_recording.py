@@ -15,9 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from seamodem import BeaconSchedule, Emissions, FrameConfig, ReceiverSettings, get_preset, load_scenario, receive_file
-from seamodem import write_beacon
+from seamodem import BeaconSchedule, Emissions, FrameConfig, ReceiverSettings, get_preset, load_scenario
+from seamodem import receive_file, write_beacon
 from seamodem import read_measurements, simulate_file, write_measurements
+from seamodem.errors import InputFileError, SeamodemError
 from seamodem.io.sidecar import read_sidecar, sidecar_path, sidecar_payloads
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "straight_line.toml"
@@ -32,6 +33,13 @@ def make_recording(out: Path) -> Path:
 
 
 def main(out: Path, recording: Path | None) -> None:
+    if recording is not None and not sidecar_path(recording).is_file():
+        # checked before anything is written: a bad input leaves no partial output behind
+        if not recording.is_file():
+            raise InputFileError(f"recording not found: {recording}")
+        raise InputFileError(f"{recording} has no sidecar {sidecar_path(recording).name} beside it (this script needs "
+                             "the emission times and payloads a sidecar holds; for a recording without one: "
+                             "seamodem rx REC.wav --emit-start T0 --emit-period T -o MEAS.csv)")
     out.mkdir(parents=True, exist_ok=True)
     recording = recording or make_recording(out)
     sidecar = read_sidecar(sidecar_path(recording))  # configuration, emission times, payloads sent, truth
@@ -58,4 +66,9 @@ def main(out: Path, recording: Path | None) -> None:
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1] if len(sys.argv) > 1 else "decode_out"), Path(sys.argv[2]) if len(sys.argv) > 2 else None)
+    try:
+        main(Path(sys.argv[1] if len(sys.argv) > 1 else "decode_out"),
+             Path(sys.argv[2]) if len(sys.argv) > 2 else None)
+    except SeamodemError as exc:  # a missing, unreadable or inconsistent recording or sidecar: one line, exit 2
+        print(f"decode_recording.py: error: {exc}", file=sys.stderr)
+        sys.exit(2)

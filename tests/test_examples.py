@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import soundfile
 
 from seamodem import read_measurements
 
@@ -73,6 +74,21 @@ def test_decode_recording_of_a_given_file(decoded, tmp_path):
     again = tmp_path / "again"
     stdout = run_example("decode_recording.py", again, decoded / "received.wav")
     assert "6 of 6 frames measured" in stdout and not (again / "received.wav").exists()
+
+
+@pytest.mark.parametrize("sidecar", ["missing", "not JSON"])
+def test_decode_recording_without_a_usable_sidecar_is_one_line(tmp_path, sidecar):
+    recording = tmp_path / "sea.wav"
+    soundfile.write(recording, np.zeros(9600), 96000)
+    if sidecar == "not JSON":
+        (tmp_path / "sea.json").write_text("{")
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, str(EXAMPLES / "decode_recording.py"), str(out), str(recording)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    err = proc.stderr.strip()
+    assert proc.returncode == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert "sea.json" in err and ("no sidecar" in err if sidecar == "missing" else "not valid JSON" in err)
+    assert not out.exists() or not any(out.iterdir())  # nothing half-written
 
 
 def test_feed_estimator(tmp_path):
