@@ -89,3 +89,48 @@ def test_plot_track_still_takes_sigma_xy(tmp_path, monkeypatch):
     ellipses = [p for p in saved["fig"].axes[0].patches if isinstance(p, Ellipse)]
     assert len(ellipses) == 10  # fewer estimates than n_ellipses: one each
     assert (ellipses[0].width, ellipses[0].height) == pytest.approx((8.0, 4.0))  # 2-σ of σx = 2, σy = 1
+
+
+def top_view_result(truth_end_xy, *, rows):
+    """A Monte Carlo result as nav simulate returns it, with tracks we choose (the planned path of a real config)."""
+    from types import SimpleNamespace
+
+    from seamodem.navigation.montecarlo import MissionConfig
+
+    config = MissionConfig()
+    planned = config.reference()[0][:, :2]
+    drift = np.linspace(0.0, 1.0, len(planned))[:, None] * (np.asarray(truth_end_xy) - planned[-1])
+    mean_track = {(3.0, "inertial"): planned + 0.5, (20.0, "inertial"): np.full_like(planned, np.nan)}
+    return SimpleNamespace(config=config, runs=300, tcoms=(3.0, 20.0), truth_track=planned + drift,
+                           mean_track=mean_track, rows=rows), planned
+
+
+def test_top_view_draws_no_diverged_track_and_counts_the_runs_it_averages(tmp_path, monkeypatch):
+    saved = capture_figure(monkeypatch)
+    rows = [{"tcom_s": 3.0, "filter": "inertial", "outliers": 4, "diverged": 0},
+            {"tcom_s": 20.0, "filter": "inertial", "outliers": 300, "diverged": 300}]
+    # the last run diverged: its vehicle, steered on the estimate, ended at (-1600, -500) m
+    result, planned = top_view_result((-1600.0, -500.0), rows=rows)
+    figures.plot_top_view(result, tmp_path / "fig7.png")
+    ax = saved["fig"].axes[0]
+    drawn = np.vstack([line.get_xydata() for line in ax.get_lines() if len(line.get_xdata())])
+    assert np.isfinite(drawn).all()
+    lo, hi = planned.min(axis=0) - 50.0, planned.max(axis=0) + 50.0
+    assert ((drawn >= lo) & (drawn <= hi)).all(), "a line leaves the planned area by more than divergence_m"
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "actual (one run)" not in labels
+    assert "estimate, T_com = 3 s (mean of 296 of 300 runs)" in labels
+    assert "T_com = 20 s: every run diverged or strayed" in labels
+    assert "mean of 300" not in ax.get_title() and (tmp_path / "fig7.png").stat().st_size > 0
+
+
+def test_top_view_draws_a_run_that_stayed_and_a_count_range_when_ambiguous(tmp_path, monkeypatch):
+    saved = capture_figure(monkeypatch)
+    rows = [{"tcom_s": 3.0, "filter": "inertial", "outliers": 5, "diverged": 2},
+            {"tcom_s": 20.0, "filter": "inertial", "outliers": 300, "diverged": 300}]
+    result, planned = top_view_result((0.0, 0.0), rows=rows)
+    result.truth_track = planned + 3.0  # 4.2 m off the plan, within divergence_m = 50 m
+    figures.plot_top_view(result, tmp_path / "fig7.png")
+    labels = [t.get_text() for t in saved["fig"].axes[0].get_legend().get_texts()]
+    # the 2 diverged runs may or may not be among the 5 outliers: 293 to 295 runs averaged
+    assert "actual (one run)" in labels and "estimate, T_com = 3 s (mean of 293-295 of 300 runs)" in labels

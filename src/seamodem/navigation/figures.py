@@ -21,26 +21,45 @@ def _filters_run(result) -> list:
 
 
 def plot_top_view(result, path: str | Path, *, filter: str | None = None, n_tcom: int = 4) -> None:
-    """Fig. 7: the true track and the run-averaged estimated tracks of the ``n_tcom`` shortest T_com.
+    """Fig. 7: the planned path and the run-averaged estimated tracks of the ``n_tcom`` shortest T_com.
 
-    ``filter`` defaults to the first estimator of the result. Runs that diverged or are outliers are left
-    out of the mean (the title says how many runs it averages).
+    ``filter`` defaults to the first estimator of the result. Each estimated track is the mean over the runs
+    that neither diverged (error above ``config.divergence_m``) nor were outliers; its legend entry says how
+    many runs that is. The one true track the result keeps (its last run) is drawn only if it stayed within
+    ``divergence_m`` of the planned path: steering on the estimate, a diverged run's vehicle goes anywhere
+    (one went to (-1600, -500) m), and no mean of runs should be drawn beside it unannounced.
     """
     filter = filter or _filters_run(result)[0]
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5, 7))
-    ax.plot(*result.truth_track.T, "k", lw=1.5, label="actual (last run)")
+    planned = result.config.reference()[0][:, :2]
+    ax.plot(*planned.T, color="0.6", lw=3, alpha=0.6, label="planned path")
+    truth = np.asarray(result.truth_track, dtype=float)
+    if truth.shape == planned.shape:
+        stray_m = float(np.max(np.hypot(*(truth - planned).T))) if np.isfinite(truth).all() else float("inf")
+        if stray_m <= result.config.divergence_m:
+            ax.plot(*truth.T, "k", lw=1.2, label="actual (one run)")
+    rows = {r["tcom_s"]: r for r in result.rows if r["filter"] == filter}
     for t in sorted(result.tcoms)[:n_tcom]:
-        if (t, filter) in result.mean_track:
-            ax.plot(*result.mean_track[(t, filter)].T, lw=0.9, label=f"estimate, T_com = {t:g} s")
+        track, row = result.mean_track.get((t, filter)), rows.get(t)
+        if track is None or row is None:
+            continue
+        # the mean leaves out the outliers and the diverged runs; a diverged run is usually one of the
+        # outliers, and the row does not say which, so the count is exact only when one set is empty
+        low = max(result.runs - row["outliers"] - row["diverged"], 0)
+        high = result.runs - max(row["outliers"], row["diverged"])
+        if high == 0 or not np.isfinite(track).all():
+            ax.plot([], [], " ", label=f"T_com = {t:g} s: every run diverged or strayed")
+            continue
+        n = f"{high}" if low == high else f"{low}-{high}"
+        ax.plot(*track.T, lw=0.9, label=f"estimate, T_com = {t:g} s (mean of {n} of {result.runs} runs)")
     ax.plot(*result.config.beacon_xy, "b*", ms=12, label="beacon")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
     ax.legend(fontsize=7, loc="upper right")
-    kept = [result.runs - r["outliers"] for r in result.rows if r["filter"] == filter]
-    ax.set_title(f"{filter}: mean of the {min(kept) if kept else result.runs} of {result.runs} runs "
-                 "that did not diverge or stray")
+    ax.set_title(f"{filter}: mean estimated tracks (runs that diverged\n"
+                 f"beyond {result.config.divergence_m:g} m or strayed left out)", fontsize=9)
     _save(fig, path)
 
 
