@@ -23,4 +23,4 @@ def test_try_it_commands_run(tmp_path, monkeypatch):
     csv, jsonl = pd.read_csv("pings_meas.csv"), pd.read_json("pings_meas.jsonl", lines=True)
     assert len(csv) == len(jsonl) == 5
     # no channel in between: heard when emitted, at the emitter's sample grid
-    assert (csv["tof_s"].abs() < 1e-6).all() and (jsonl["frame_index"] == range(5)).all()
+    assert (csv["tof_s"].abs() < 1e-6).all() and list(jsonl["frame_index"]) == [0, 1, 2, 3, 4]

@@ -70,6 +70,8 @@ __all__ = [
 
 #: a Doppler CRLB above this fraction of v_max/c means the ping cannot measure its Doppler (σ_ε is then v_max/c)
 DOPPLER_THRESHOLD = 0.1
+#: a fit whose residual exceeds this many times the noise has its Doppler (and place on the ridge) untrusted
+MISFIT_LIMIT = 4.0
 #: smallest normalised correlation of a detection: ≈ S/(S + N) in the baseband's band, so detection reaches
 #: in-band SNRs near −10 dB, while an impulse of k samples in a ping of N gives ρ ≈ k/N (≈ 0.02 for a 1 ms
 #: snap in a 50 ms ping); unlike the frame detector, a ping has no data of its own to reject
@@ -325,7 +327,7 @@ class ReferenceDetector:
     def _first_arrival(self, amp, hit, j0: int, strongest: int) -> int:
         floor = self.first_path_fraction * amp[strongest]
         w = self.half_lobe
-        for j in range(j0, strongest - 2 * w + 1):
+        for j in range(j0, strongest - w):
             if hit[j] and amp[j] >= floor and amp[j] >= np.max(amp[max(0, j - w) : j + w + 1]):
                 return j
         return strongest
@@ -348,7 +350,8 @@ class ReferenceFit:
     snr_db : float
         In-band SNR over [f_low, f_high] during the reference [dB].
     sigma_t_s, sigma_eps : float
-        CRLB at the measured E/N0 × the misfit inflation √χ²; σ_ε is v_max/c when that CRLB exceeds
+        CRLB at the measured E/N0 × the misfit inflation √χ² × the fitted echoes' inflation (the
+        multi-path Fisher matrix over the direct path's alone); σ_ε is v_max/c when that exceeds
         :data:`DOPPLER_THRESHOLD`·v_max/c; σ_t = √(σ_ridge² + g²σ_ε²) (the joint CRLB when σ_ε is).
     ridge_t_s, sigma_ridge_s : float
         The delay–Doppler ridge coordinate t_a + g·ε (g the reference's ridge slope) and its σ (the known-ε bound):
@@ -374,6 +377,10 @@ class ReferenceFit:
 
 #: echoes are sought this long after the direct path's end [s]
 ECHO_WINDOW_S = 0.03
+#: an earlier path is sought this long before the detected one [s] (within the detector's resolution)
+EARLY_WINDOW_S = 0.001
+#: an earlier path counts as the first arrival from this fraction of the detected path's amplitude
+FIRST_PATH_FRACTION = 0.3
 #: most echoes fitted beside the direct path
 MAX_ECHOES = 2
 #: an echo is fitted when its residual correlation exceeds this many times the noise (|c|²/(σ² E_q))
@@ -456,6 +463,29 @@ class _PathFitter:
                 break
         return float(ta), float(eps)
 
+    def echo_inflation(self, ta: float, eps: float, gain: complex, echoes: list) -> tuple[float, float]:
+        """How much the fitted echoes widen the direct path's bounds: (σ_ε, σ_ridge) with them over without.
+
+        The Fisher matrix of every path's (t_a, ε, Re A, Im A), J ∝ Re(DᴴD) in white baseband noise,
+        inverted whole and for the direct path alone: an echo closer than the main lobe makes the direct
+        path's arrival uncertain however high the SNR, which a single-path CRLB does not say.
+        """
+        cols = []
+        for t_p, e_p, a_p in [(ta, eps, gain), *echoes]:
+            q, dq = self.replica.scaled_with_derivative(self.t, t_arrival_s=t_p, eps=e_p, carrier_hz=self.carrier_hz)
+            cols += [-(1 + e_p) * a_p * dq, (self.t - t_p) * a_p * dq, q, 1j * q]
+        d = np.stack(cols)
+        fisher = np.real(d @ np.conj(d).T)
+        try:
+            cov = np.linalg.inv(fisher)
+            alone = np.linalg.inv(fisher[:4, :4])
+        except np.linalg.LinAlgError:
+            return math.inf, math.inf
+        ridge = np.array([1.0, self.g])
+        k_e = math.sqrt(max(cov[1, 1] / alone[1, 1], 1.0))
+        k_ridge = math.sqrt(max((ridge @ cov[:2, :2] @ ridge) / (ridge @ alone[:2, :2] @ ridge), 1.0))
+        return k_e, k_ridge
+
     def find_echo(self, resid, ta: float, eps: float, noise: float) -> float | None:
         """Arrival of the strongest later path in the residual, if significant (|c|²/(σ² E_q) ≥ ECHO_Z)."""
         fs = self.fs
@@ -463,8 +493,11 @@ class _PathFitter:
         n = scipy.fft.next_fast_len(len(resid) + len(p))
         c = scipy.fft.ifft(scipy.fft.fft(resid, n) * np.conj(scipy.fft.fft(p, n)))[: len(resid)]
         lags = self.t[0] + np.arange(len(resid)) / fs
-        # beyond the direct path's main lobe, within the window after it
-        ok = (lags > ta + 1.5 / self.replica.reference.bandwidth_hz) & (lags < ta + ECHO_WINDOW_S + 0.5 * self.replica.duration_s)
+        # beyond the fitted path's main lobe: within the window after it, or just before it (a direct path
+        # closer to a stronger echo than the detector resolves)
+        lobe = 1.5 / self.replica.reference.bandwidth_hz
+        later = (lags > ta + lobe) & (lags < ta + ECHO_WINDOW_S + 0.5 * self.replica.duration_s)
+        ok = later | ((lags < ta - lobe) & (lags > ta - EARLY_WINDOW_S))
         if not np.any(ok):
             return None
         z = np.where(ok, np.abs(c) ** 2, 0.0) / (noise * float(np.sum(np.abs(p) ** 2)))
@@ -504,7 +537,7 @@ def fit_reference(
     bound = reference_crlb(replica) if bound is None else bound
     g = bound.ridge_slope_s
     dur = replica.duration_s
-    lo = max(0, int(math.floor((detection.t_start_s - 2 / fs - t0_s) * fs)))
+    lo = max(0, int(math.floor((detection.t_start_s - EARLY_WINDOW_S - 2 / fs - t0_s) * fs)))
     hi = min(len(r), int(math.ceil((detection.t_start_s + dur * 1.01 + ECHO_WINDOW_S + 2 / fs - t0_s) * fs)) + 1)
     x = r[lo:hi]
     t = t0_s + np.arange(lo, hi) / fs
@@ -526,8 +559,13 @@ def fit_reference(
             te, ee = path.fit(resid, echo, eps, 0.0, grid=True)
             qe = replica.scaled(t, t_arrival_s=te, eps=ee, carrier_hz=carrier_hz)
             ae = np.vdot(qe, resid) / float(np.real(np.vdot(qe, qe)))
-            echoes.append([te, ee, ae, qe])
             resid = resid - ae * qe
+            if te < ta and abs(ae) >= FIRST_PATH_FRACTION * abs(gain):
+                # an earlier path, too close to the strongest for the detector to tell apart: the first arrival
+                echoes.append([ta, eps, gain, q])
+                ta, eps, gain, q = te, ee, ae, qe
+            else:
+                echoes.append([te, ee, ae, qe])
         for _ in range(3 if echoes else 0):
             others = sum(e[2] * e[3] for e in echoes)
             ta_before = ta
@@ -559,10 +597,13 @@ def fit_reference(
     snr_db = 10 * math.log10(max(e_n0 / (band * dur / (1 + eps)), 1e-30))
     _, s_e, s_ridge = bound.at(e_n0)
     inflate = math.sqrt(max(1.0, misfit))
-    s_e, s_ridge = s_e * inflate, s_ridge * inflate
-    if s_e > DOPPLER_THRESHOLD * eps_max:
-        # below the Doppler threshold (an HFM at moderate SNR): the likelihood hardly varies along the ridge
-        # within ±v_max, the ML lands anywhere in the search range and the CRLB no longer describes its error
+    k_e, k_ridge = path.echo_inflation(ta, eps, gain, [(e[0], e[1], e[2]) for e in echoes]) if echoes else (1.0, 1.0)
+    s_e, s_ridge = s_e * inflate * k_e, s_ridge * inflate * k_ridge
+    if s_e > DOPPLER_THRESHOLD * eps_max or misfit > MISFIT_LIMIT:
+        # below the Doppler threshold (an HFM at moderate SNR), the likelihood hardly varies along the ridge
+        # within ±v_max: the ML lands anywhere in the search range and the CRLB no longer describes its error;
+        # likewise when the fitted paths leave much more than noise (unresolved echoes), the ping's place on its
+        # ridge is not to be trusted
         s_e = max(s_e, eps_max)
     return ReferenceFit(
         t_arrival_s=float(ta),
