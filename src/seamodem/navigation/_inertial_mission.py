@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .imu import bias_step, imu_reading
 from .inertial import _cartesian, _gated_acoustic, _predict, _to_internal, _update_heading
 from .vehicle import feedback_command, vehicle_step
 
@@ -80,10 +81,8 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         x += current[0] * dt
         y += current[1] * dt
         accel_true = (v - v_old) / dt
-        bias += sigmas[3] * noise[k, 3] + bias_rate * dt
-        head_m = psi + bias + sigmas[0] * noise[k, 0]
-        omega_m = omega + sigmas[1] * noise[k, 1]
-        accel_m = accel_true + sigmas[2] * noise[k, 2]
+        bias = bias_step(bias, sigmas, noise, k, bias_rate, dt)
+        head_m, omega_m, accel_m = imu_reading(psi, bias, omega, accel_true, sigmas, noise, k)
         sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
         sensors[k, 3] = sensors[k, 4] = np.nan
         _predict(z, P, lay, beacon, qd, omega_m, accel_m, dt, zp, F, A, Pp)
