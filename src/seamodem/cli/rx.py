@@ -311,9 +311,9 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
             on_frame=on_frame,
             progress=False if args.quiet else None,
         )
-        if args.array:  # the generator above is never started
-            from ._array import array_header, array_records
+        from ._array import array_header, array_records
 
+        if args.array:  # the generator above is never started
             records = array_records(args, inputs)
         counted = _Counted(records)
         n = write_measurements(out, counted, _header(args, [inputs], batch=False) | array_header(args))
