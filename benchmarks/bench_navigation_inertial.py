@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from seamodem.navigation.inertial import chart_nees
 from seamodem.navigation.montecarlo import (
     PAPER_TABLE,
     MissionConfig,
@@ -66,17 +67,6 @@ def protocol(runs: int, out: list) -> None:
             print("\n".join(out[-(len(TCOMS) + 3):]), flush=True)
 
 
-def _chart_nees(run, truth):
-    """Position NEES (2 dof) per node in the filter's own chart ((x, y) or (rho, beta) about the beacon)."""
-    e = run.internal_states[:, :2].copy()
-    polar = run.charts == 1
-    d = truth - run.beacon_xy
-    e[polar, 0] -= np.hypot(d[polar, 0], d[polar, 1])
-    e[polar, 1] = np.angle(np.exp(1j * (e[polar, 1] - np.arctan2(d[polar, 1], d[polar, 0]))))
-    e[~polar] -= truth[~polar]
-    return np.einsum("ki,kij,kj->k", e, np.linalg.inv(run.internal_covariances[:, :2, :2]), e)
-
-
 def consistency(out: list) -> None:
     out.append(f"\n## Consistency: {NEES_RUNS} runs per row, T_com 3 s, steering on the truth, filter told the "
                "truth and started from a draw of its prior; 99 % band of the run-averaged NEES/NIS (2 dof): "
@@ -98,7 +88,7 @@ def consistency(out: list) -> None:
             noise_arr = mission_noise(0, run, n)
             err, est, truth, det = simulate_inertial_mission(config, noise_arr, filter="batch", reference=ref)
             fr = det["filter_run"]
-            nees_f.append(_chart_nees(fr, truth))
+            nees_f.append(chart_nees(fr, truth))
             for states, covs, acc in ((fr.states, fr.covariances, nees_c), (det["states"], det["covariances"], nees_b)):
                 e = states[:, :2] - truth
                 acc.append(np.einsum("ki,kij,kj->k", e, np.linalg.inv(covs[:, :2, :2]), e))

@@ -21,6 +21,7 @@ from seamodem.navigation.inertial import (
     _update_heading,
     add_fixes,
     build_nodes,
+    chart_nees,
     run_filter,
 )
 from seamodem.navigation.montecarlo import MissionConfig, NoiseModel, mission_noise, simulate_inertial_mission
@@ -256,17 +257,6 @@ def test_config_validation_names_the_parameter():
         NoiseModel(heading_bias_model="sine")
 
 
-def chart_errors(run, truth):
-    """Position error of each node in the filter's own chart: (x, y) or (ρ, β) about the beacon."""
-    e = run.internal_states[:, :2].copy()
-    polar = run.charts == 1
-    d = truth - run.beacon_xy
-    e[polar, 0] -= np.hypot(d[polar, 0], d[polar, 1])
-    e[polar, 1] = np.angle(np.exp(1j * (e[polar, 1] - np.arctan2(d[polar, 1], d[polar, 0]))))
-    e[~polar] -= truth[~polar]
-    return e
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("sigma_d", [0.001, 0.01, 1.0, 5.0])
 def test_filter_is_consistent_from_millimetres_to_metres(sigma_d):
@@ -284,8 +274,7 @@ def test_filter_is_consistent_from_millimetres_to_metres(sigma_d):
                                                      filter="batch", reference=ref)
         fr = det["filter_run"]
         assert fr.charts.mean() > 0.5  # mostly polar (Cartesian only where the spread nears the distance)
-        e = chart_errors(fr, truth)
-        nees.append(np.einsum("ki,kij,kj->k", e, np.linalg.inv(fr.internal_covariances[:, :2, :2]), e))
+        nees.append(chart_nees(fr, truth))
         nis.append(fr.nis[fr.status == 1])
     anees = float(np.mean(nees))
     mnis = float(np.mean(np.concatenate(nis)))

@@ -61,6 +61,8 @@ __all__ = [
     "run_filter",
     "state_names",
     "CHI2_GATE",
+    "chart_nees",
+    "to_cartesian",
 ]
 
 #: χ² quantiles for the gate: probability → (1 dof, 2 dof). Computed with scipy.stats.chi2.ppf,
@@ -870,6 +872,23 @@ def to_cartesian(states, covariances, charts, beacon_xy):
     c[:, :, :2] = np.einsum("kmj,kij->kmi", c[:, :, :2], J)
     covariances[k] = c
     return states, covariances
+
+
+def chart_nees(run: "FilterRun", truth_xy) -> np.ndarray:
+    """Position NEES (2 dof) of each node in the filter's own chart: (x, y), or (ρ, β) about the beacon.
+
+    This is the consistency of what the filter claims. In Cartesian coordinates (``run.covariances``) the
+    ellipse of a polar node is the tangent of a curved posterior and is not meant to hold the truth to σ_d
+    across it.
+    """
+    truth_xy = np.asarray(truth_xy, dtype=float)
+    e = run.internal_states[:, :2].copy()
+    polar = run.charts == 1
+    d = truth_xy - run.beacon_xy
+    e[polar, 0] -= np.hypot(d[polar, 0], d[polar, 1])
+    e[polar, 1] = np.angle(np.exp(1j * (e[polar, 1] - np.arctan2(d[polar, 1], d[polar, 0]))))
+    e[~polar] -= truth_xy[~polar]
+    return np.einsum("ki,kij,kj->k", e, np.linalg.inv(run.internal_covariances[:, :2, :2]), e)
 
 
 @dataclass(eq=False)
