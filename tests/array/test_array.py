@@ -362,3 +362,19 @@ def test_channel_mismatch_through_the_simulator_is_removed_by_calibration():
         truth = sim.truth[r.frame_index]["paths"][0]
         e = abs(math.remainder(r.azimuth_body_rad - truth["azimuth_body_rad"], 2 * math.pi))
         assert e < 3 * r.sigma_azimuth_body_rad + np.radians(0.02)
+
+
+def test_a_frame_cut_by_the_recording_keeps_its_record_without_direction():
+    # the recording starts 1 ms before the first frame's arrival: the detector still finds it on channel 0,
+    # its pilot window lies outside the recording, so it has no direction but is not dropped
+    x, t_emit = _beacon(count=2)
+    sim = simulate_array(x, FS, _scenario(snr_db=20.0, max_bounces=0), TETRA, t_emit_s=t_emit,
+                         frame_duration_s=CFG.frame_duration_s, band_hz=CFG.data_band_hz)
+    cut = int((sim.truth[0]["t_arrival_s"] - 0.001) * FS)
+    em = Emissions(start_s=0.1 - cut / FS, period_s=1.0)
+    recs, doas = receive_array(sim.output[cut:], FS, CFG, TETRA.element_positions_m, emissions=em)
+    assert [r.frame_index for r in recs] == [0, 1]
+    assert recs[0].n_channels == 1 and doas[0] is None and math.isnan(recs[0].azimuth_body_rad)
+    assert recs[1].n_channels == 4 and math.isfinite(recs[1].azimuth_body_rad)
+    for r, d in zip(recs, doas):
+        assert (d is None) == (r.n_channels == 1) and (d is None) == math.isnan(r.azimuth_body_rad)

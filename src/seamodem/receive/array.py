@@ -487,7 +487,7 @@ def receive_array(
     combine: bool = True,
     payloads=None,
     pilot: np.ndarray | None = None,
-) -> tuple[list[MeasurementRecord], list[DoaEstimate]]:
+) -> tuple[list[MeasurementRecord], list[DoaEstimate | None]]:
     """Measurement records with the direct path's direction of arrival, from a multichannel recording.
 
     1. The single-hydrophone receiver detects and measures every frame on
@@ -515,9 +515,10 @@ def receive_array(
     -------
     records : list of MeasurementRecord
         With ``azimuth_body_rad``, ``elevation_body_rad``, their σ's and
-        ``n_channels`` filled.
-    doas : list of DoaEstimate
-        One per record.
+        ``n_channels`` filled; a frame whose pilot the recording cuts keeps
+        the reference channel's record (NaN direction, ``n_channels`` 1).
+    doas : list of DoaEstimate or None
+        One per record (None without a direction).
     """
     from .stream import Receiver
 
@@ -562,12 +563,14 @@ def receive_array(
             y[i0:i1] = ramp * beam + np.sqrt(1.0 - ramp**2) * y[i0:i1]
         second = list(Receiver(config, emissions=emissions, settings=s, pilot=pilot, payloads=payloads).run([y], fs=fs))
     else:
-        second = used
+        second = first
     records = []
-    out_doas = []
+    out_doas: list[DoaEstimate | None] = []
     for rec in second:
         j = int(np.argmin([abs(u.t_arrival_s - rec.t_arrival_s) for u in used])) if used else -1
         if j < 0 or abs(used[j].t_arrival_s - rec.t_arrival_s) > 0.01:
+            records.append(rec)  # no direction (pilot cut by the recording's edge): one hydrophone's record
+            out_doas.append(None)
             continue
         d = doas[j]
         records.append(dataclasses.replace(
