@@ -137,9 +137,17 @@ def test_config_command(tmp_path, capsys):
 
 
 def test_plot_truncated_wav(tmp_path, capsys):
+    """A file cut mid-recording is read as far as it goes, with one warning line (issue 14); one cut
+    inside its header is refused in one line."""
     whole = tmp_path / "whole.wav"
     soundfile.write(whole, np.zeros(10000), 48000, subtype="FLOAT")
     cut = tmp_path / "cut.wav"
     cut.write_bytes(whole.read_bytes()[:20000])
-    code, _, err = run(["plot", cut], capsys)
-    assert code == 2 and "truncated" in err and len(err.strip().splitlines()) == 1
+    code, _, err = run(["plot", cut, "-o", tmp_path / "cut.png"], capsys)
+    assert code == 0 and (tmp_path / "cut.png").stat().st_size > 0
+    assert "warning" in err and "4980 samples" in err and len(err.strip().splitlines()) == 1
+    headless = tmp_path / "headless.wav"
+    headless.write_bytes(whole.read_bytes()[:44])
+    code, _, err = run(["plot", headless, "-o", tmp_path / "headless.png"], capsys)
+    assert code == 2 and "not a readable audio file" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "headless.png").exists()
