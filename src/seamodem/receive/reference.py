@@ -781,7 +781,7 @@ class ReferenceReceiver:
             for d in dets:
                 fit = fit_reference(
                     ch.buf, fs, ch.buf_start / fs, replica=det.replica, carrier_hz=self.plan.centre_hz, detection=d,
-                    search_eps=max(det.eps[1] - det.eps[0], 1e-5) if len(det.eps) > 1 else 1e-4,
+                    search_eps=det.eps[1] - det.eps[0] if len(det.eps) > 1 else self.v_max / self.c,
                     noise_bandwidth_hz=self.plan.noise_bandwidth_hz, eps_max=self.v_max / self.c, bound=self.bounds[i],
                 )
                 found.append(_Found(self.references[i], d, fit, index))
