@@ -360,6 +360,8 @@ class ReferenceFit:
         χ² of the residual per sample over the noise level (≈ 1: noise only).
     ridge_slope_s : float
         g of the reference (:class:`~seamodem.transmit.reference.ReferenceBound`).
+    n_paths : int
+        Paths fitted: the direct one and the echoes found beside it.
     """
 
     t_arrival_s: float
@@ -373,6 +375,7 @@ class ReferenceFit:
     sigma_ridge_s: float
     misfit: float
     ridge_slope_s: float = 0.0
+    n_paths: int = 1
 
 
 #: echoes are sought this long after the direct path's end [s]
@@ -617,6 +620,7 @@ def fit_reference(
         sigma_ridge_s=s_ridge,
         misfit=misfit,
         ridge_slope_s=g,
+        n_paths=1 + len(echoes),
     )
 
 
@@ -890,6 +894,8 @@ def to_record(f: _Found, emissions, *, sound_speed_mps: float, clock_offset_s: f
         snr_db=fit.snr_db,
         v_r_tone_eq9_mps=math.nan,
         v_r_bank_mps=fit.eps * c,
+        v_r_source="bank",
+        n_paths=fit.n_paths,
         detection_z=f.detection.z,
         detection_rho=f.detection.rho,
         sigma_range_m=c * fit.sigma_t_s,
