@@ -446,7 +446,7 @@ class _PathFitter:
         if search_eps:
             eps = dichotomy_max(
                 lambda e: self.corr(x, best_t(e), e),
-                max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=search_eps / 32,
+                max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=search_eps / 8,
             )
         ta = best_t(eps)
         # joint Gauss–Newton polish of what the dichotomy's tolerance left (kept only while it improves the fit)
