@@ -17,7 +17,7 @@ from ..config import FrameConfig
 from .detect import Detection, doppler_bin_spacing_hz
 from .doppler import PilotFit, ToneFit, fit_pilot, tone_frequency_ml, tone_segment, tone_track_eq9
 from .frontend import FrontEndPlan
-from .multipath import PathFit, direct_path_doppler, fit_paths
+from .multipath import PathFit, direct_path_doppler, find_echoes, fit_paths
 
 __all__ = ["FrameMeasurement", "measure_frame", "in_band_snr_db", "impulse_excess", "frame_span_s", "NOISE_GAP_S", "NOISE_WINDOW_S"]
 
@@ -47,6 +47,10 @@ class FrameMeasurement:
         The eq 9 v_r track over the frame interior (times [s], speeds [m/s]).
     complete : bool
         False when the recording ends before the frame does.
+    echoes : PathFit or None
+        ``paths`` with the echoes up to a pilot's length later
+        (:func:`~seamodem.receive.multipath.find_echoes`), when the arrival
+        fit resolved more than one path (None otherwise: not searched).
     """
 
     detection: Detection
@@ -58,6 +62,7 @@ class FrameMeasurement:
     track_t_s: np.ndarray
     track_v_mps: np.ndarray
     complete: bool
+    echoes: PathFit | None = None
 
     @property
     def compensation_speed_mps(self) -> float:
@@ -116,18 +121,23 @@ def measure_frame(
         eps=fit.v_mps / c,
         es_n0=fit.es_n0,
     )
+    echoes = None
     if len(paths.delays_s) > 1:
         # unresolved echoes pull the single-path fit towards them: take the first path's
-        # delay, and its Doppler with the echoes' pilots removed
+        # delay, and its Doppler with the echoes' pilots removed. The echoes are searched
+        # here, once (direct_path_doppler would search them itself, and the whole-frame
+        # fit needs them again): given them and no more to find, it only refits amplitudes
+        echoes = find_echoes(bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, paths=paths, eps=fit.v_mps / c)
         eps = direct_path_doppler(
             bb,
             plan.fs_data,
             bb_t0_s,
             config=config,
             pilot=pilot,
-            paths=paths,
+            paths=echoes,
             eps=fit.v_mps / c,
             search=doppler_bin_spacing_hz(config) / config.carrier_hz,
+            max_echoes=0,
         )
         fit = dataclasses.replace(fit, t_start_s=paths.first_s, v_mps=eps * c)
     scale = 1 + fit.v_mps / c
@@ -158,6 +168,7 @@ def measure_frame(
         track_t_s=track_t,
         track_v_mps=track_v,
         complete=bool(complete),
+        echoes=echoes,
     )
 
 

@@ -186,7 +186,8 @@ class Receiver:
         symbols = np.concatenate([self.pilot, data])
         reference = np.concatenate([np.ones(cfg.n_pilot, bool), trusted])
         eps = m.pilot.v_mps / c
-        paths = find_echoes(bb, fs, t0_s, config=cfg, pilot=self.pilot, paths=m.paths, eps=eps)
+        paths = m.echoes if m.echoes is not None else find_echoes(bb, fs, t0_s, config=cfg, pilot=self.pilot,
+                                                                  paths=m.paths, eps=eps)
         try:
             wf: WholeFrameFit = fit_whole_frame(bb, fs, t0_s, config=cfg, symbols=symbols, reference=reference,
                                                 delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,

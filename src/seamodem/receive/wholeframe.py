@@ -22,8 +22,11 @@ is run at the path's symbol instants, the known symbols are stripped
 (z_k = y_k x_k*), and the phase of z summed over ``n_segments`` consecutive
 segments is fitted by weighted least squares with a line and a parabola in
 time; the line's slope is the Doppler correction, the parabola the drift.
-Two sweeps over the paths suffice: the paths interfere only through the
-data's random cross-correlation once their delays differ by a symbol or more.
+Sweeps repeat until none moves a path's Doppler by a tenth of its σ (2–3
+sweeps): the paths interfere only through the data's random cross-correlation
+once their delays differ by a symbol or more. The matched filter and the
+synthesis of each path's contribution are computed in the FFT domain on the
+frame's stretch of baseband (:class:`_Segment`), the pulse's time scale exact.
 
 The standard deviation of each path's Doppler is the least-squares one from
 the segments' phase residuals (it grows with whatever the model leaves:
@@ -39,8 +42,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import FrameConfig
-from ..transmit.pulse import srrc_truncation_energy
-from .doppler import _srrc_interp, matched_filter
 
 __all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
 
@@ -110,20 +111,101 @@ def _phase(config: FrameConfig, t_rel: np.ndarray, eps: float, beta: float) -> n
     return 2 * np.pi * config.carrier_hz * (eps * t_rel + 0.5 * beta * ((t_rel - half) ** 2 - half**2))
 
 
-def _synthesize(n: int, fs: float, t0_s: float, *, config: FrameConfig, symbols, instants, scale: float) -> np.ndarray:
-    """Σ_k x_k g₁((t_n − t_k)/T')/√E on the grid t_n = t0 + n/fs, without the carrier phase."""
-    T = config.symbol_period_s / scale
-    n_half = config.srrc_span_symbols // 2
-    width = int(math.ceil(2 * n_half * T * fs)) + 2
-    first = np.ceil((instants - n_half * T - t0_s) * fs - 1e-9).astype(np.int64)
-    idx = first[:, None] + np.arange(width)[None, :]
-    u = (t0_s + idx / fs - instants[:, None]) / T
-    g = _srrc_interp(u, float(config.rolloff), n_half) * (np.abs(u) <= n_half)
-    g /= math.sqrt(srrc_truncation_energy(float(config.rolloff), n_half))
-    ok = (idx >= 0) & (idx < n)
-    values = (g * symbols[:, None])[ok]
-    where = idx[ok]
-    return np.bincount(where, values.real, minlength=n) + 1j * np.bincount(where, values.imag, minlength=n)
+#: the matched filter's output is computed at this multiple of the baseband rate and read at the
+#: symbol instants by 6-point Lagrange interpolation (symbols are spread onto that grid by its
+#: transpose): for the data band's ±4.5 kHz at 13.7 kHz × 4, error ≤ 8.5e-5 of the signal (−81 dB)
+_UPSAMPLE = 4
+_TAPS = np.arange(-2, 4)  # the interpolator's sample offsets around a position
+
+
+def _srrc_spectrum(f_hz: np.ndarray, period_s: float, rolloff: float) -> np.ndarray:
+    """H(f) = √T·S(fT) of the unit-energy SRRC pulse h of symbol period T (S: 1 in the flat band, cosine roll-off)."""
+    nu = np.abs(f_hz) * period_s
+    lo = (1 - rolloff) / 2
+    roll = np.cos(np.pi / (2 * rolloff) * np.clip(nu - lo, 0.0, rolloff))  # 0 beyond (1 + rolloff)/2
+    return math.sqrt(period_s) * np.where(nu <= lo, 1.0, roll)
+
+
+def _lagrange_basis() -> np.ndarray:
+    """Coefficients (power of d, tap) of the Lagrange basis polynomials on the points ``_TAPS``."""
+    basis = np.zeros((len(_TAPS), len(_TAPS)))
+    for j, oj in enumerate(_TAPS):
+        others = _TAPS[_TAPS != oj]
+        basis[:, j] = np.poly(others)[::-1] / np.prod(oj - others)
+    return basis
+
+
+_BASIS = _lagrange_basis()
+
+
+def _lagrange(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lagrange interpolation on the points ``_TAPS`` around fractional grid positions: (floor, weights (n, 6))."""
+    i = np.floor(pos).astype(np.int64)
+    return i, np.vander(pos - i, len(_TAPS), increasing=True) @ _BASIS
+
+
+class _Segment:
+    """FFT-domain SRRC matched filter and synthesis on one stretch of baseband.
+
+    The SRRC is band-limited below fs/2, so with h the unit-energy pulse of
+    period T' (spectrum :func:`_srrc_spectrum`, time scale exact):
+
+    - matched filter: c(t) = ∫ r(u) h(u − t) du is IFFT(R·H) on the grid,
+      zero-padded to ``_UPSAMPLE``·fs and read at t_k; y_k = c(t_k)/√T', so that
+      r = A Σ x_k √T' h(t − t_k) gives y_k = A x_k (as
+      :func:`~seamodem.receive.doppler.matched_filter`, without its 32-symbol truncation);
+    - synthesis: s(t) = Σ x_k √T' h(t − t_k) is fs·IFFT(√T' H·X) with
+      X(f) = Σ x_k e^{−j2πf(t_k − t0)}, the symbols spread onto the upsampled
+      grid by the transposed interpolation.
+
+    One FFT of the segment and one of the upsampled grid per call (≈ 1 ms),
+    against a gather of every symbol's 69-sample support (≈ 10 ms).
+    """
+
+    def __init__(self, n: int, fs: float, t0_s: float, *, config: FrameConfig):
+        import scipy.fft
+
+        self._fft = scipy.fft
+        pad = int(math.ceil(config.srrc_span_symbols / 2 * config.symbol_period_s * fs)) + 8
+        self.n, self.fs, self.t0_s, self.config = n, fs, t0_s, config
+        self.m = scipy.fft.next_fast_len(n + 2 * pad)
+        self.big = _UPSAMPLE * self.m
+        freqs_hz = scipy.fft.fftfreq(self.m, 1 / fs)
+        # the pulse's band (|f| < (1 + rolloff)/(2T'), T' within 1 % of T): the only bins computed
+        edge = 1.01 * (1 + config.rolloff) / (2 * config.symbol_period_s)
+        self.band = np.flatnonzero(np.abs(freqs_hz) < edge)
+        self.band_hz = freqs_hz[self.band]
+        self.band_big = np.where(self.band_hz >= 0, self.band, self.band + self.big - self.m)  # same f at L·fs
+        self.t_s = t0_s + np.arange(n) / fs
+
+    def _pulse(self, scale: float) -> tuple[float, np.ndarray]:
+        period = self.config.symbol_period_s / scale
+        return period, _srrc_spectrum(self.band_hz, period, float(self.config.rolloff))
+
+    def _grid(self, instants_s: np.ndarray):
+        i0, w = _lagrange((instants_s - self.t0_s) * self.fs * _UPSAMPLE)
+        return (i0[:, None] + _TAPS[None, :]) % self.big, w
+
+    def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float):
+        """Matched-filter outputs at ``instants_s`` of r with ``offset_hz`` (phase 0 at ``t_ref_s``) removed."""
+        period, h = self._pulse(scale)
+        x = r * np.exp(-2j * np.pi * offset_hz * (self.t_s - t_ref_s)) if offset_hz else r
+        up = np.zeros(self.big, complex)
+        up[self.band_big] = self._fft.fft(x, self.m)[self.band] * h
+        c = self._fft.ifft(up) * _UPSAMPLE
+        idx, w = self._grid(instants_s)
+        return np.einsum("kj,kj->k", c[idx], w) / math.sqrt(period)
+
+    def synthesize(self, symbols: np.ndarray, instants_s: np.ndarray, *, scale: float) -> np.ndarray:
+        """Σ x_k √T' h(t_n − t_k) on the segment's grid, without the carrier phase."""
+        period, h = self._pulse(scale)
+        idx, w = self._grid(instants_s)
+        spread = (w * symbols[:, None]).ravel()
+        flat = idx.ravel()
+        grid = np.bincount(flat, spread.real, self.big) + 1j * np.bincount(flat, spread.imag, self.big)
+        spec = np.zeros(self.m, complex)
+        spec[self.band] = self._fft.fft(grid)[self.band_big] * h
+        return (self.fs * math.sqrt(period)) * self._fft.ifft(spec)[: self.n]
 
 
 def fit_whole_frame(
@@ -138,7 +220,7 @@ def fit_whole_frame(
     v_mps: float,
     sound_speed_mps: float,
     n_segments: int = 32,
-    sweeps: int = 2,
+    sweeps: int = 4,
 ) -> WholeFrameFit:
     """Fit every path's gain, mean Doppler and drift over the whole frame.
 
@@ -158,9 +240,9 @@ def fit_whole_frame(
     n_segments : int
         Segments whose phases the Doppler and the drift are fitted to.
     sweeps : int
-        Passes over the paths (one when there is a single path). In the first,
-        each path's matched filter runs twice: the Doppler found moves the
-        symbol instants.
+        Most passes over the paths; the fit stops after a pass that moved no
+        path's Doppler by a tenth of its σ (the first pass of several paths
+        always has a second: it ran before the later paths were subtracted).
     """
     c = sound_speed_mps
     f0 = config.carrier_hz
@@ -174,62 +256,73 @@ def fit_whole_frame(
     eps = np.full(n_paths, v_mps / c)
     beta = np.zeros(n_paths)
     amps = np.zeros(n_paths, complex)
-    t_grid = t0_s + np.arange(len(bb)) / fs
     lo = max(0, int((delays[0] - t0_s) * fs) - config.srrc_span_symbols * int(fs * config.symbol_period_s + 1))
     hi = min(len(bb), int((delays[-1] + config.frame_duration_s - t0_s) * fs) + 1)
-    seg_bb, seg_t, seg_t0 = bb[lo:hi], t_grid[lo:hi], t0_s + lo / fs
+    seg = _Segment(hi - lo, fs, t0_s + lo / fs, config=config)
+    seg_bb = bb[lo:hi]
     models = np.zeros((n_paths, hi - lo), complex)
+    total = np.zeros(hi - lo, complex)  # Σ models
     # segments of equal reference-symbol counts
     edges = np.linspace(0, n_ref, n_segments + 1).round().astype(int)
     seg_of = np.searchsorted(edges, np.arange(n_ref), side="right") - 1
+    counts = np.bincount(seg_of, minlength=n_segments).astype(float)
+    half = config.frame_duration_s / 2
 
     def model(p):
         inst = _instants(config, delays[p], eps[p], beta[p])
-        shape = _synthesize(hi - lo, fs, seg_t0, config=config, symbols=x, instants=inst, scale=1 + eps[p])
-        return amps[p] * shape * np.exp(1j * _phase(config, seg_t - delays[p], eps[p], beta[p]))
+        shape = seg.synthesize(x, inst, scale=1 + eps[p])
+        return amps[p] * shape * np.exp(1j * _phase(config, seg.t_s - delays[p], eps[p], beta[p]))
 
     def outputs(p, r):
         """Symbols stripped matched-filter outputs z_k of path p, drift phase removed."""
         inst = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
-        y = matched_filter(r, fs, seg_t0, inst, config=config, scale=1 + eps[p],
-                           carrier_offset_hz=f0 * eps[p], t_ref_s=delays[p])
+        y = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p])
         extra = _phase(config, inst - delays[p], 0.0, beta[p])
         return y * np.exp(-1j * extra) * np.conj(x[ref_idx]), inst
 
+    def phase_fit(z, inst, p):
+        """Weighted LS line + parabola through the segments' phases: (coefficients, σ of the slope)."""
+        zs = np.bincount(seg_of, z.real, n_segments) + 1j * np.bincount(seg_of, z.imag, n_segments)
+        ts = np.bincount(seg_of, inst, n_segments) / counts - (delays[p] + half)
+        phi = np.unwrap(np.angle(zs))
+        w = np.abs(zs) ** 2 / counts  # ∝ segment SNR: phase variance 1/(2·SNR)
+        design = np.column_stack([np.ones(n_segments), ts, ts**2])
+        sw = np.sqrt(w)
+        coef, *_ = np.linalg.lstsq(design * sw[:, None], phi * sw, rcond=None)
+        resid = phi - design @ coef
+        s2 = float(np.sum(w * resid**2) / (n_segments - 3))
+        cov = s2 * np.linalg.inv(design.T @ (design * w[:, None]))
+        return coef, math.sqrt(max(cov[1, 1], 0.0))
+
     sigma_b = np.full(n_paths, math.inf)
-    # a lone path has nothing to alternate with: one sweep; later sweeps start close, one pass each
-    for sweep in range(sweeps if n_paths > 1 else 1):
+    # SAGE: each sweep filters every path once, the others' fitted contributions removed. The
+    # Doppler found moves the symbol instants, so a path, a lone one too, is filtered again in
+    # the next sweep; the fit stops after a sweep that moved no path's Doppler by a tenth of its
+    # σ (three paths at 12 dB: 3 sweeps, 10 filters and 9 syntheses; a lone path: 1–2 filters)
+    for sweep in range(sweeps):
+        moved = False
         for p in range(n_paths):
-            others = models.sum(axis=0) - models[p]
-            r = seg_bb - others
-            for _ in range(2 if sweep == 0 else 1):
-                z, inst = outputs(p, r)
-                zs = np.bincount(seg_of, z.real, n_segments) + 1j * np.bincount(seg_of, z.imag, n_segments)
-                counts = np.bincount(seg_of, minlength=n_segments).astype(float)
-                ts = np.bincount(seg_of, inst, n_segments) / counts - (delays[p] + config.frame_duration_s / 2)
-                phi = np.unwrap(np.angle(zs))
-                w = np.abs(zs) ** 2 / counts  # ∝ segment SNR: phase variance 1/(2·SNR)
-                design = np.column_stack([np.ones(n_segments), ts, ts**2])
-                sw = np.sqrt(w)
-                coef, *_ = np.linalg.lstsq(design * sw[:, None], phi * sw, rcond=None)
-                resid = phi - design @ coef
-                dof = n_segments - 3
-                s2 = float(np.sum(w * resid**2) / dof)
-                cov = s2 * np.linalg.inv(design.T @ (design * w[:, None]))
-                sigma_b[p] = math.sqrt(cov[1, 1])
-                eps[p] += coef[1] / (2 * np.pi * f0)
-                beta[p] += coef[2] / (np.pi * f0)
-            # the amplitude from the last outputs, less the phase the update added to the model
+            z, inst = outputs(p, seg_bb - (total - models[p]) if n_paths > 1 else seg_bb)
+            coef, sigma_b[p] = phase_fit(z, inst, p)
+            eps[p] += coef[1] / (2 * np.pi * f0)
+            beta[p] += coef[2] / (np.pi * f0)
+            moved |= bool(abs(coef[1]) > 0.1 * sigma_b[p])
+            # the amplitude from the outputs, less the phase the update added to the model
             # (c1·(t − τ_p) + c2·((t − t_c)² − (D/2)²)); the update moves the instants by a hair
-            half = config.frame_duration_s / 2
             tk = inst - (delays[p] + half)
             amps[p] = np.mean(z * np.exp(-1j * (coef[1] * (tk + half) + coef[2] * (tk**2 - half**2))))
-            models[p] = model(p)
+            if n_paths > 1:
+                new = model(p)
+                total += new - models[p]
+                models[p] = new
+        if not moved and (sweep > 0 or n_paths == 1):
+            break
+    if n_paths == 1:
+        total = model(0)
     # noise per matched-filter output from the residual of all paths, at the first path's instants
-    resid = seg_bb - models.sum(axis=0)
+    resid = seg_bb - total
     inst = _instants(config, delays[0], eps[0], beta[0])[ref_idx]
-    noise = matched_filter(resid, fs, seg_t0, inst, config=config, scale=1 + eps[0],
-                           carrier_offset_hz=f0 * eps[0], t_ref_s=delays[0])
+    noise = seg.filter(resid, inst, scale=1 + eps[0], offset_hz=f0 * eps[0], t_ref_s=delays[0])
     noise_var = max(float(np.mean(np.abs(noise) ** 2)), np.finfo(float).tiny)
     es_n0 = np.abs(amps) ** 2 / noise_var
     crlb = known_signal_velocity_crlb_mps(config, es_n0, n_ref, sound_speed_mps=c)
