@@ -110,14 +110,18 @@ class ImpulseBlanker:
         buf = self._pending
         L = self.chunk
         n_chunks = -(-len(buf) // L)
-        padded = np.full(n_chunks * L, np.nan)
-        padded[: len(buf)] = np.abs(buf)
-        scales = _MAD_TO_SIGMA * np.nanmedian(padded.reshape(n_chunks, L), axis=1)
+        mag = np.abs(buf)
+        n_full = len(buf) // L
+        scales = np.empty(n_chunks)
+        scales[:n_full] = np.median(mag[: n_full * L].reshape(n_full, L), axis=1)
+        if n_chunks > n_full:  # the last, partial chunk (end of input)
+            scales[n_full] = np.median(mag[n_full * L :])
+        scales *= _MAD_TO_SIGMA
         left = scales[0] if self._prev_scale is None else self._prev_scale
         ext = np.concatenate([[left], scales, [scales[-1]]])
         ref = np.maximum(np.maximum(ext[:-2], ext[1:-1]), ext[2:])
         limit = np.where(ref > 0, self.threshold * ref, np.inf)
-        hit = np.abs(buf) > np.repeat(limit, L)[: len(buf)]
+        hit = mag > np.repeat(limit, L)[: len(buf)]
         mask = _dilate(hit, self.guard)
         mask[: min(self._carry, len(mask))] = True
         out = buf[:n_final].copy()
