@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from .imu import bias_step, imu_reading
-from .inertial import _cartesian, _gated_acoustic, _predict, _to_internal, _update_heading
+from .inertial import _cartesian, _gated_acoustic, _predict, _to_internal, _update_bearing, _update_heading
 from .vehicle import feedback_command, vehicle_step
 
 
@@ -23,7 +23,7 @@ from .vehicle import feedback_command, vehicle_step
 def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beacon, dt, com_every, use_vr,
                             steer_on_estimate, v_min, v_max, omega_max, accel_max, current, range_scale, bias_rate,
                             z0, P0, lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations,
-                            second_order, sensors):
+                            second_order, bearing_sigma, gate_bearing, sensors):
     """Run one mission; return error (n+1,), estimate (n+1, 2), truth (n+1, 2), status (n+1,), nis (n+1,).
 
     Parameters (beyond :func:`~seamodem.navigation._kernels.mission_kernel`'s)
@@ -35,7 +35,12 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     z0, P0 : Cartesian filter start (the position, speed and bias parts; the heading is set from the step-0
         reading); converted to the filter's chart (``lay[4]``) inside
     lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations : the filter (see ``inertial``)
-    sensors : (n + 1, 5) output: heading, gyro, accelerometer readings, range and v_r (NaN without a frame)
+    bearing_sigma : standard deviation of the beacon's body-frame azimuth per frame [rad] (a hydrophone array,
+        issue 17); 0: no array. Its normal is ``noise[k − 1, 5]``, the v_r column of the step before the
+        frame, which no kernel uses when ``com_every`` ≥ 2: the runs without an array see the same numbers.
+    gate_bearing : χ² (1 dof) gate of a bearing update
+    sensors : (n + 1, 6) output: heading, gyro, accelerometer readings, range, v_r and body azimuth (NaN
+        without a frame, or without an array)
     """
     n = reference.shape[0] - 1
     m = z0.shape[0]
@@ -71,6 +76,8 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     truth[0, 0], truth[0, 1] = x, y
     error[0] = np.sqrt((ex - x) ** 2 + (ey - y) ** 2)
     gated_run = 0
+    bearing_gated = 0
+    sensors[0, 5] = np.nan
     scale = 1.0 + range_scale
     sx, sy, spsi, sv = (ex, ey, z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
     omega, accel = feedback_command(sx, sy, spsi, sv, reference[0, 0], reference[0, 1], reference[0, 2],
@@ -84,7 +91,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         bias = bias_step(bias, sigmas, noise, k, bias_rate, dt)
         head_m, omega_m, accel_m = imu_reading(psi, bias, omega, accel_true, sigmas, noise, k)
         sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
-        sensors[k, 3] = sensors[k, 4] = np.nan
+        sensors[k, 3] = sensors[k, 4] = sensors[k, 5] = np.nan
         _predict(z, P, lay, beacon, qd, omega_m, accel_m, dt, zp, F, A, Pp)
         if k % com_every == 0:
             dx, dy = x - beacon[0], y - beacon[1]
@@ -98,6 +105,14 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
                                                                gate, gate_reset_after, gated_run, iterations,
                                                                second_order, work, Hw)
         _update_heading(z, P, head_m, heading_var, ph)
+        if bearing_sigma > 0 and k % com_every == 0:
+            # after the heading update, as filter_nodes orders a node's measurements
+            az = np.arctan2(beacon[1] - y, beacon[0] - x) - psi + bearing_sigma * noise[k - 1, 5]
+            az = (az + np.pi) % (2 * np.pi) - np.pi
+            sensors[k, 5] = az
+            _, used = _update_bearing(z, P, lay, beacon, z.copy(), az, bearing_sigma * bearing_sigma, gate_bearing,
+                                      bearing_gated >= gate_reset_after, ph)
+            bearing_gated = 0 if used else bearing_gated + 1
         ex, ey = _cartesian(z, lay, beacon)
         estimate[k, 0], estimate[k, 1] = ex, ey
         truth[k, 0], truth[k, 1] = x, y

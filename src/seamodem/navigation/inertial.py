@@ -58,6 +58,7 @@ __all__ = [
     "FilterRun",
     "build_nodes",
     "add_fixes",
+    "add_bearings",
     "run_filter",
     "state_names",
     "CHI2_GATE",
@@ -446,6 +447,46 @@ def _update_position(z, P, lay, beacon, about, fix, var, ph):
 
 
 @njit(cache=True, nogil=True)
+def _update_bearing(z, P, lay, beacon, about, azimuth, var, gate, force, ph):
+    """Scalar update with the beacon's body-frame azimuth (a hydrophone array, issue 17); returns (NIS, used).
+
+    h = wrap(atan2(y_b − y, x_b − x) − ψ) (:func:`.bearing.bearing_body`, level vehicle). In the polar chart
+    atan2(y_b − y, x_b − x) = β + π, so h = wrap(β + π − ψ) is *linear* in the state (H = e_β − e_ψ): the
+    bearing pins the rotation about the beacon that range, v_r and a biased heading leave free. In the
+    Cartesian chart H = (dy/ρ², −dx/ρ², −1) with (dx, dy) = beacon − (x, y), linearized about ``about`` (the
+    filter passes its own state, the batch smoother its nominal track). The innovation is wrapped; the
+    update is skipped when its NIS exceeds ``gate`` (1 dof) unless ``force``.
+    """
+    n = z.shape[0]
+    for i in range(n):
+        ph[i] = 0.0
+    if lay[4] == 1:
+        h0 = about[1] + np.pi - about[2]
+        nu = _wrap(azimuth - h0) - (z[1] - about[1]) + (z[2] - about[2])
+        for i in range(n):
+            ph[i] = P[i, 1] - P[i, 2]
+        s = ph[1] - ph[2] + var
+    else:
+        dx, dy = beacon[0] - about[0], beacon[1] - about[1]
+        r2 = dx * dx + dy * dy
+        hx, hy = dy / r2, -dx / r2
+        h0 = np.arctan2(dy, dx) - about[2]
+        nu = _wrap(azimuth - h0) - hx * (z[0] - about[0]) - hy * (z[1] - about[1]) + (z[2] - about[2])
+        for i in range(n):
+            ph[i] = P[i, 0] * hx + P[i, 1] * hy - P[i, 2]
+        s = hx * ph[0] + hy * ph[1] - ph[2] + var
+    nis = nu * nu / s
+    if nis > gate and not force:
+        return nis, False
+    for i in range(n):
+        z[i] += ph[i] / s * nu
+    for i in range(n):
+        for j in range(n):
+            P[i, j] -= ph[i] * ph[j] / s
+    return nis, True
+
+
+@njit(cache=True, nogil=True)
 def _cartesian(z, lay, beacon):
     """(x, y) of a state in either coordinate system."""
     if lay[4] == 0:
@@ -671,7 +712,7 @@ def _gated_acoustic(z, P, lay, beacon, meas, var, use_range, use_vr, gate, gate_
 @njit(cache=True, nogil=True)
 def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var, has_acoustic,
                  meas, meas_var, use_range, use_vr, gate, gate_reset_after, iterations, second_order, has_fix, fix,
-                 fix_var, history):
+                 fix_var, has_bearing, bearing, bearing_var, gate_bearing, history):
     """Run the filter over nodes; fill the posterior states and covariances.
 
     Parameters
@@ -682,6 +723,8 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
     has_heading, heading, heading_var : (N,) heading measurement per node
     has_acoustic, meas, meas_var : (N,), (N, 2), (N, 2) acoustic (range, v_r) per node
     has_fix, fix, fix_var : (N,), (N, 2), (N,) position fixes (GNSS at the surface) per node
+    has_bearing, bearing, bearing_var : (N,) body-frame azimuth of the beacon per node (hydrophone array)
+    gate_bearing : χ² (1 dof) gate of a bearing update
     history : (N, n, 3n + 1) work output: ``[:, :, 0]`` prior state, ``[:, :, 1:n+1]`` prior covariance,
         ``[:, :, n+1:2n+1]`` posterior covariance, ``[:, :, 2n+1:3n+1]`` F from node i − 1 to i
 
@@ -691,6 +734,8 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
     nis : (N,) NIS of each acoustic node (NaN elsewhere)
     status : (N,) 0 no frame, 1 accepted, 2 gated, 3 accepted after ``gate_reset_after`` gates in a row
     charts : (N,) the chart of each node's state (0 Cartesian, 1 polar)
+    bearing_nis, bearing_status : (N,) NIS of each bearing (NaN elsewhere); 0 none, 1 used, 2 gated, 3 used
+        although above the gate (the previous bearing was gated too)
     """
     N = dt.shape[0]
     n = z0.shape[0]
@@ -708,7 +753,10 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
     states = np.empty((N, n))
     nis_out = np.full(N, np.nan)
     status = np.zeros(N, dtype=np.int8)
+    bearing_nis = np.full(N, np.nan)
+    bearing_status = np.zeros(N, dtype=np.int8)
     gated_run = 0
+    bearing_gated = 0
     for i in range(N):
         if i > 0:
             _predict(z, P, lay, beacon, qd, omega[i], accel[i], dt[i], zp, F, A, Pp)
@@ -728,13 +776,19 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
                                                                second_order, work, Hw)
         if has_heading[i]:
             _update_heading(z, P, heading[i], heading_var[i], ph)
+        if has_bearing[i]:
+            force = bearing_gated >= gate_reset_after
+            bearing_nis[i], used = _update_bearing(z, P, lay, beacon, z.copy(), bearing[i], bearing_var[i],
+                                                   gate_bearing, force, ph)
+            bearing_status[i] = (3 if bearing_nis[i] > gate_bearing else 1) if used else 2
+            bearing_gated = 0 if used else bearing_gated + 1
         if has_fix[i]:
             _update_position(z, P, lay, beacon, z.copy(), fix[i], fix_var[i], ph)
         for a in range(n):
             states[i, a] = z[a]
             for b in range(n):
                 history[i, a, n + 1 + b] = P[a, b]
-    return states, nis_out, status, charts
+    return states, nis_out, status, charts, bearing_nis, bearing_status
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -750,7 +804,9 @@ class Nodes:
     ``accel`` applied over the step into each node, the heading measurement (``has_heading``,
     ``heading``, ``heading_var``), the acoustic measurement (``has_acoustic``, ``meas`` (N, 2) range and
     v_r, ``meas_var`` (N, 2)), ``frame`` (index of the record at that node, −1 elsewhere) and ``imu``
-    (index of the IMU sample at that node, −1 elsewhere).
+    (index of the IMU sample at that node, −1 elsewhere). Optional: position fixes (``has_fix``, ``fix``
+    (N, 2), ``fix_var``, :func:`add_fixes`) and the beacon's body-frame azimuth from a hydrophone array
+    (``has_bearing``, ``bearing``, ``bearing_var``, :func:`add_bearings`).
     """
 
     t_s: np.ndarray
@@ -768,13 +824,20 @@ class Nodes:
     has_fix: np.ndarray = None
     fix: np.ndarray = None
     fix_var: np.ndarray = None
+    has_bearing: np.ndarray = None
+    bearing: np.ndarray = None
+    bearing_var: np.ndarray = None
 
     def __post_init__(self):
+        N = self.t_s.size
         if self.has_fix is None:
-            N = self.t_s.size
             object.__setattr__(self, "has_fix", np.zeros(N, dtype=bool))
             object.__setattr__(self, "fix", np.zeros((N, 2)))
             object.__setattr__(self, "fix_var", np.ones(N))
+        if self.has_bearing is None:
+            object.__setattr__(self, "has_bearing", np.zeros(N, dtype=bool))
+            object.__setattr__(self, "bearing", np.zeros(N))
+            object.__setattr__(self, "bearing_var", np.ones(N))
 
     def __len__(self) -> int:
         return self.t_s.size
@@ -848,6 +911,21 @@ def add_fixes(nodes: Nodes, t_s, x_m, y_m, sigma_m) -> Nodes:
     return replace(nodes, has_fix=has_fix, fix=fix, fix_var=fix_var)
 
 
+def add_bearings(nodes: Nodes, azimuth_rad, sigma_rad) -> Nodes:
+    """Nodes with the beacon's body-frame azimuth at the frames' nodes (one value per frame of the records
+    :func:`build_nodes` was given, in that order; NaN: no bearing for that frame)."""
+    azimuth_rad = np.asarray(azimuth_rad, dtype=float)
+    var = np.broadcast_to(np.asarray(sigma_rad, dtype=float) ** 2, azimuth_rad.shape)
+    has, bearing, bearing_var = nodes.has_bearing.copy(), nodes.bearing.copy(), nodes.bearing_var.copy()
+    at = np.flatnonzero(nodes.frame >= 0)
+    idx = nodes.frame[at]
+    ok = np.isfinite(azimuth_rad[idx]) & np.isfinite(var[idx]) & (var[idx] > 0)
+    has[at[ok]] = True
+    bearing[at[ok]] = azimuth_rad[idx[ok]]
+    bearing_var[at[ok]] = var[idx[ok]]
+    return replace(nodes, has_bearing=has, bearing=bearing, bearing_var=bearing_var)
+
+
 def to_cartesian(states, covariances, charts, beacon_xy):
     """States (N, n) and covariances (N, n, n) in the filter's charts → Cartesian (x, y, …) copies.
 
@@ -898,7 +976,8 @@ class FilterRun:
     ``states`` and ``covariances`` are Cartesian (x, y, ψ, v, b, …) whatever coordinates the filter ran
     in; ``internal_states`` and ``internal_covariances`` are the filter's own (polar (ρ, β, …) when
     ``config.polar``; ``charts`` says which, per node: 0 Cartesian, 1 polar). ``status`` per node: 0 no frame, 1 accepted, 2 gated (not used), 3 accepted after a
-    run of gated frames (the gate was reset). ``nis`` per node (NaN without a frame). ``history`` keeps
+    run of gated frames (the gate was reset). ``nis`` per node (NaN without a frame); ``bearing_status`` and
+    ``bearing_nis`` the same for the array's bearings (:func:`add_bearings`). ``history`` keeps
     what the smoothers need (priors, covariances, transition Jacobians), in the filter's coordinates.
     ``z0``, ``P0`` are the Cartesian start given to :func:`run_filter`; ``internal_z0``, ``internal_P0`` the
     same in the chart of node 0.
@@ -918,6 +997,8 @@ class FilterRun:
     charts: np.ndarray = field(repr=False, default=None)
     internal_z0: np.ndarray = field(repr=False, default=None)
     internal_P0: np.ndarray = field(repr=False, default=None)
+    bearing_nis: np.ndarray = field(repr=False, default=None)
+    bearing_status: np.ndarray = field(repr=False, default=None)
     _cartesian: tuple = field(repr=False, default=None)
 
     @property
@@ -955,11 +1036,12 @@ class FilterRun:
 
 
 def run_filter(nodes: Nodes, config: InertialConfig, *, beacon_xy, z0, P0, use_vr: bool = True,
-               use_range: bool = True, start_from_first_heading: bool = True) -> FilterRun:
+               use_range: bool = True, start_from_first_heading: bool = True, use_bearing: bool = True) -> FilterRun:
     """The inertial filter over ``nodes`` from the Cartesian (z0, P0) at node 0.
 
     With ``start_from_first_heading`` (z0, P0) already hold node 0's heading reading
     (:meth:`InertialConfig.initial` with ``heading_from_sensor``), so node 0's heading update is skipped.
+    Bearings on the nodes (:func:`add_bearings`) are used unless ``use_bearing`` is false.
     """
     z0 = np.array(z0, dtype=float)
     P0 = np.array(P0, dtype=float)
@@ -975,13 +1057,14 @@ def run_filter(nodes: Nodes, config: InertialConfig, *, beacon_xy, z0, P0, use_v
     has_heading = nodes.has_heading.copy()
     if start_from_first_heading:
         has_heading[0] = False
-    states, nis, status, charts = filter_nodes(zi, Pi, lay, config.process_density, beacon, nodes.dt_s,
-                                               nodes.omega, nodes.accel, has_heading, nodes.heading,
-                                               nodes.heading_var, nodes.has_acoustic, nodes.meas, nodes.meas_var,
-                                               use_range, use_vr, gate, config.gate_reset_after, config.iterations,
-                                               config.second_order, nodes.has_fix, nodes.fix, nodes.fix_var,
-                                               history)
-    return FilterRun(nodes, config, beacon, use_vr, states, history, nis, status, z0, P0, has_heading, charts, zi, Pi)
+    has_bearing = nodes.has_bearing & bool(use_bearing)
+    states, nis, status, charts, b_nis, b_status = filter_nodes(
+        zi, Pi, lay, config.process_density, beacon, nodes.dt_s, nodes.omega, nodes.accel, has_heading, nodes.heading,
+        nodes.heading_var, nodes.has_acoustic, nodes.meas, nodes.meas_var, use_range, use_vr, gate,
+        config.gate_reset_after, config.iterations, config.second_order, nodes.has_fix, nodes.fix, nodes.fix_var,
+        has_bearing, nodes.bearing, nodes.bearing_var, config.gate[0], history)
+    return FilterRun(nodes, config, beacon, use_vr, states, history, nis, status, z0, P0, has_heading, charts, zi, Pi,
+                     b_nis, b_status)
 
 
 def with_options(config: InertialConfig, **kwargs) -> InertialConfig:

@@ -100,6 +100,9 @@ class NoiseModel:
         Gyro white noise [rad/s] (√0.005 = 0.0707, inside the paper's ±0.1 s⁻¹).
     sigma_accel_mps2 : float
         Accelerometer white noise [m/s²] (√0.005, inside the paper's ±0.1 m/s²).
+    sigma_bearing_deg : float
+        The beacon's body-frame azimuth from a hydrophone array on the vehicle (issue 17), one per frame [deg];
+        0 (default): no array. The inertial filters and smoothers then use it; the paper's filters do not.
     heading_bias_model : {"random_walk", "drift"}
         How ``heading_drift_deg_per_h`` is read. ``"random_walk"`` (the reproduction's choice so far): a
         random walk whose standard deviation is that value after one hour. ``"drift"``: a bias that drifts
@@ -114,6 +117,7 @@ class NoiseModel:
     heading_drift_deg_per_h: float = 5.0
     sigma_omega_rad_s: float = math.sqrt(EQ25_R["omega"])
     sigma_accel_mps2: float = math.sqrt(EQ25_R["a"])
+    sigma_bearing_deg: float = 0.0
     heading_bias_model: str = "random_walk"
 
     def __post_init__(self):
@@ -356,7 +360,7 @@ def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filte
     ``"inertial"`` mission, ``"fixed_lag"`` (latency ``config.lag_s``) or ``"batch"``. The controller steers
     on the filter (or the truth); a smoother post-processes the sensors that mission recorded, through the
     same filter re-run over them (equal to the in-loop filter: tested). ``details`` has the filter's
-    ``status`` and ``nis`` per step, the recorded ``sensors`` (n + 1, 5) and, for smoothers, the
+    ``status`` and ``nis`` per step, the recorded ``sensors`` (n + 1, 6) and, for smoothers, the
     ``states`` and ``covariances`` of the output.
     """
     from ._inertial_mission import inertial_mission_kernel
@@ -380,25 +384,31 @@ def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filte
                       icfg.p0_speed_mps * noise[0, 4], icfg.p0_bias_rad * noise[0, 5])
     sig = config.noise.sigmas(config.dt_s)
     meas_var = np.array([max(config.noise.sigma_range_m, 1e-6) ** 2, max(config.noise.sigma_vr_mps, 1e-6) ** 2])
-    sensors = np.empty((n + 1, 5))
+    sensors = np.empty((n + 1, 6))
     gate = icfg.gate[1 if use_vr else 0]
+    bearing_sigma = math.radians(config.noise.sigma_bearing_deg)
+    if bearing_sigma > 0 and config.com_every < 2:
+        raise ConfigError("sigma_bearing_deg", "a bearing needs T_com of at least two IMU steps (its noise is drawn "
+                                               f"from the step before the frame), got T_com {config.tcom_s} s")
     error, estimate, truth, status, nis = inertial_mission_kernel(
         reference, noise, start, offsets, sig, np.asarray(config.beacon_xy, dtype=float), config.dt_s,
         config.com_every, use_vr, config.steer_on_estimate, config.v_min_mps, config.v_max_mps,
         config.omega_max_rad_s, config.accel_max_mps2, np.asarray(config.current_mps, dtype=float),
         config.range_scale, config.noise.bias_rate(noise), z0, P0, icfg.layout, icfg.process_density,
         icfg.heading_sigma_rad**2, meas_var, gate, icfg.gate_reset_after, icfg.iterations, icfg.second_order,
-        sensors)
+        bearing_sigma, icfg.gate[0], sensors)
     details = {"status": status, "nis": nis, "sensors": sensors}
     if filter in ("inertial", "inertial_range"):
         return error, estimate, truth, details
-    from .inertial import build_nodes, run_filter
+    from .inertial import add_bearings, build_nodes, run_filter
     from .smoothing import batch_smooth, fixed_lag_smooth
 
     t = np.arange(n + 1) * config.dt_s
     frames = np.isfinite(sensors[:, 3])
     nodes = build_nodes(t, sensors[:, 0], sensors[:, 1], sensors[:, 2], t[frames], sensors[frames, 3],
                         sensors[frames, 4], meas_var[0], meas_var[1], heading_var=icfg.heading_sigma_rad**2)
+    if bearing_sigma > 0:
+        nodes = add_bearings(nodes, sensors[frames, 5], bearing_sigma)
     z_start = z0.copy()
     z_start[[0, 1, 3]] += offsets[:3]
     z_start[2] = sensors[0, 0] - z_start[4]

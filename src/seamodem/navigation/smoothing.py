@@ -24,8 +24,8 @@ import numpy as np
 from numba import njit
 
 from ..errors import ConfigError
-from .inertial import (FilterRun, _acoustic_model, _convert, _motion, _process_polar, _propagate_cov, _update_heading,
-                       _update_position, _wrap, to_cartesian)
+from .inertial import (FilterRun, _acoustic_model, _convert, _motion, _process_polar, _propagate_cov, _update_bearing,
+                       _update_heading, _update_position, _wrap, to_cartesian)
 
 __all__ = ["SmoothedTrack", "batch_smooth", "fixed_lag_smooth"]
 
@@ -73,8 +73,8 @@ def _rts(post, P_post, prior, P_prior, C):
 
 @njit(cache=True, nogil=True)
 def _linearized_pass(nominal, z0, P0, lay, charts, qd, beacon, dt, omega, accel, has_heading, heading, heading_var,
-                     use_frame, meas, meas_var, use_range, use_vr, has_fix, fix, fix_var, post, P_post, prior, P_prior,
-                     F_all):
+                     use_frame, meas, meas_var, use_range, use_vr, has_fix, fix, fix_var, use_bearing, bearing,
+                     bearing_var, post, P_post, prior, P_prior, F_all):
     """Kalman filter of the model linearized about ``nominal`` (one Gauss–Newton step, forward half).
 
     ``charts`` (N,) is the filter's chart per node (0 Cartesian, 1 polar): ``nominal[i]`` is in chart
@@ -143,6 +143,8 @@ def _linearized_pass(nominal, z0, P0, lay, charts, qd, beacon, dt, omega, accel,
             # the heading row is linear: the same update as the filter's, angle wrapped about the nominal
             _update_heading(z, P, nominal[i, 2] + nominal[i, 4] + _wrap(heading[i] - nominal[i, 2] - nominal[i, 4]),
                             heading_var[i], ph)
+        if use_bearing[i]:
+            _update_bearing(z, P, lay, beacon, nominal[i], bearing[i], bearing_var[i], np.inf, True, ph)
         if has_fix[i]:
             _update_position(z, P, lay, beacon, nominal[i], fix[i], fix_var[i], ph)
         for a in range(n):
@@ -153,6 +155,12 @@ def _linearized_pass(nominal, z0, P0, lay, charts, qd, beacon, dt, omega, accel,
 
 def _used_frames(run: FilterRun) -> np.ndarray:
     return run.nodes.has_acoustic & (run.status != 2)
+
+
+def _used_bearings(run: FilterRun) -> np.ndarray:
+    if run.bearing_status is None:
+        return np.zeros(len(run.nodes), dtype=bool)
+    return (run.bearing_status == 1) | (run.bearing_status == 3)
 
 
 def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6, cartesian: bool = True) -> SmoothedTrack:
@@ -200,8 +208,8 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6,
     for it in range(1, max_iterations + 1):
         _linearized_pass(nominal, z0, P0, lay, charts, cfg.process_density, run.beacon_xy,
                          nodes.dt_s, nodes.omega, nodes.accel, run.has_heading, nodes.heading, nodes.heading_var, use,
-                         nodes.meas, nodes.meas_var, use_range, run.use_vr, nodes.has_fix, nodes.fix, nodes.fix_var, post,
-                         P_post, prior, P_prior, F)
+                         nodes.meas, nodes.meas_var, use_range, run.use_vr, nodes.has_fix, nodes.fix, nodes.fix_var,
+                         _used_bearings(run), nodes.bearing, nodes.bearing_var, post, P_post, prior, P_prior, F)
         C = _rts_gains(post, P_post, prior, P_prior, F)
         xs, Ps = _rts(post, P_post, prior, P_prior, C)
         step = float(np.max(np.abs(xs - nominal)))
