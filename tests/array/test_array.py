@@ -227,10 +227,12 @@ def test_position_uncertainty_widens_sigma_to_cover_position_errors():
     assert outside_without >= 3
 
 
-def test_planar_array_is_refused_for_direction_finding():
-    x, _ = _plane_wave(array_preset("circle4").element_positions_m, 0.3, 0.0)
-    with pytest.raises(ConfigError, match="one plane"):
-        _doa(x, 0.05, array_preset("circle4").element_positions_m)
+def test_vertical_flat_array_is_refused_for_direction_finding():
+    # a flat array standing vertically (x-z plane): its mirror ambiguity is port/starboard, not the elevation's sign
+    p = array_preset("circle4").element_positions_m[:, [0, 2, 1]]
+    x, _ = _plane_wave(p, 0.3, 0.0)
+    with pytest.raises(ConfigError, match="vertically"):
+        _doa(x, 0.05, p)
 
 
 def test_calibration_recovers_gain_and_phase_offsets():

@@ -115,6 +115,11 @@ class ReceiverArray:
     position_sigma_m : float
         What a receiver assumes of its nominal positions' error, per axis [m]
         (widens its σ; the simulator ignores it).
+    assume : str, optional
+        What a receiver assumes to resolve a flat array's mirror ambiguity
+        ("below" by default, or "above" its plane) or a horizontal linear
+        array's cone ("port" by default, or "starboard", elevation 0)
+        (:func:`seamodem.receive.array.array_geometry`); none for a volume array.
     """
 
     element_positions_m: Any
@@ -125,6 +130,7 @@ class ReceiverArray:
     pitch_rad: float = 0.0
     roll_rad: float = 0.0
     position_sigma_m: float = 0.0
+    assume: str | None = None
 
     def __post_init__(self):
         pos = _matrix("array.element_positions_m", self.element_positions_m, (3,))
@@ -146,6 +152,9 @@ class ReceiverArray:
                 and self.position_sigma_m >= 0):
             raise ConfigError("array.position_sigma_m", f"must be a number >= 0, got {self.position_sigma_m!r}")
         object.__setattr__(self, "position_sigma_m", float(self.position_sigma_m))
+        if self.assume is not None and self.assume not in ("below", "above", "port", "starboard"):
+            raise ConfigError("array.assume", f"must be below, above (flat array), port or starboard (linear array), "
+                                              f"got {self.assume!r}")
         for name in ("heading_rad", "pitch_rad", "roll_rad"):
             value = getattr(self, name)
             if value is None and name == "heading_rad":
@@ -210,6 +219,7 @@ class ReceiverArray:
             "pitch_rad": self.pitch_rad,
             "roll_rad": self.roll_rad,
             "position_sigma_m": self.position_sigma_m,
+            "assume": self.assume,
             "axes": "body frame: x forward, y port, z up; R = Rz(heading) Ry(-pitch) Rx(roll)",
         }
 
@@ -218,7 +228,7 @@ class ReceiverArray:
         if not isinstance(d, dict):
             raise ConfigError("array", f"must be a table, got {d!r}")
         known = ("element_positions_m", "position_errors_m", "gain_db", "phase_rad", "heading_rad", "pitch_rad", "roll_rad",
-                 "position_sigma_m")
+                 "position_sigma_m", "assume")
         for key in d:
             if key not in known and key != "axes":
                 raise ConfigError(f"array.{key}", f"unknown key (known: {', '.join(known)})")
@@ -242,12 +252,13 @@ def _circle(n: int, aperture_m: float) -> np.ndarray:
 #: preset name → (description, builder(aperture_m))
 ARRAY_PRESETS = {
     "tetra": "4 elements on a regular tetrahedron (azimuth and elevation unambiguous)",
-    "circle": "n elements on a horizontal circle (azimuth; elevation up to its sign)",
+    "circle": "n elements on a horizontal circle (azimuth; elevation up to its sign: beacon assumed below)",
+    "line": "n elements on a fore-aft line (angle to the line only: beacon assumed to port at elevation 0)",
 }
 
 
 def array_preset(spec: str) -> ReceiverArray:
-    """An array from a short spec: ``tetra[:APERTURE_M]`` or ``circleN[:APERTURE_M]`` (default 0.08 m).
+    """An array from a short spec: ``tetra``, ``circleN`` or ``lineN``, then ``[:APERTURE_M]`` (default 0.08 m).
 
     Examples
     --------
@@ -267,7 +278,12 @@ def array_preset(spec: str) -> ReceiverArray:
         return ReceiverArray(element_positions_m=_tetrahedron(aperture))
     if name.startswith("circle") and name[6:].isdigit() and int(name[6:]) >= 3:
         return ReceiverArray(element_positions_m=_circle(int(name[6:]), aperture))
-    raise ConfigError("array", f"unknown array {spec!r}: a TOML/JSON file, or tetra[:APERTURE_M] or circleN[:APERTURE_M] (N >= 3)")
+    if name.startswith("line") and name[4:].isdigit() and int(name[4:]) >= 2:
+        n = int(name[4:])
+        x = np.linspace(-0.5 * aperture, 0.5 * aperture, n)
+        return ReceiverArray(element_positions_m=np.stack([x, np.zeros(n), np.zeros(n)], axis=1))
+    raise ConfigError("array", f"unknown array {spec!r}: a TOML/JSON file, or tetra[:APERTURE_M], "
+                               "circleN[:APERTURE_M] (N >= 3) or lineN[:APERTURE_M] (N >= 2)")
 
 
 def load_array(spec: str | Path) -> ReceiverArray:
