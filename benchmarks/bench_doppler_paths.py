@@ -63,7 +63,8 @@ def _scenario(snr_db: float, *, noise: dict, echoes: bool):
     return parse_scenario(table)
 
 
-def _row(n: int, snr_db: float, *, noise: dict, echoes: bool = True, settings: ReceiverSettings | None = None):
+def _simulate(n: int, snr_db: float, *, noise: dict, echoes: bool = True):
+    """n beacon frames through the simulator: (simulation, emission times, payloads)."""
     sched = BeaconSchedule(count=n, period_s=PERIOD, start_s=0.0)
     beacon = render_beacon(CFG, sched)
     x = np.zeros(beacon.n_samples + int(0.6 * FS))
@@ -74,16 +75,21 @@ def _row(n: int, snr_db: float, *, noise: dict, echoes: bool = True, settings: R
     band = (CFG.carrier_hz - CFG.bandwidth_hz / 2, CFG.carrier_hz + CFG.bandwidth_hz / 2)
     sim = simulate(x, FS, _scenario(snr_db, noise=noise, echoes=echoes), t_emit_s=t_emit,
                    frame_duration_s=CFG.frame_duration_s, band_hz=band)
+    return sim, t_emit, [f.payload for f in beacon.frames]
+
+
+def _row(n: int, snr_db: float, *, noise: dict, echoes: bool = True, settings: ReceiverSettings | None = None):
+    sim, t_emit, payloads = _simulate(n, snr_db, noise=noise, echoes=echoes)
     settings = settings or ReceiverSettings(decode=True)
-    rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=settings,
-                  payloads=[f.payload for f in beacon.frames])
+    rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=settings, payloads=payloads)
     t0 = time.perf_counter()
     recs = [r for r in rx.run([sim.output], fs=FS) if 0 <= r.frame_index < n]
     elapsed = time.perf_counter() - t0
     truth = sim.truth
     k = np.array([r.frame_index for r in recs])
     col = {name: np.array([getattr(r, name) for r in recs], dtype=float) for name in (
-        "v_r_mps", "v_r_tone_mps", "sigma_v_r_mps", "range_m", "sigma_range_m", "ber", "snr_db", "blanked_fraction")}
+        "v_r_mps", "v_r_tone_mps", "sigma_v_r_mps", "range_m", "sigma_range_m", "ber", "raw_ber", "eq_snr_db",
+        "snr_db", "blanked_fraction")}
     col["v_true"] = np.array([truth[i]["v_r_true_mps"] for i in k])
     col["r_true"] = np.array([C * truth[i]["tof_true_s"] for i in k])
     col["crc"] = np.array([bool(r.crc_ok) for r in recs])
@@ -105,30 +111,36 @@ def _stats(err, sigma):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=100)
+    ap.add_argument("--only", default=None, help="run only the rows whose name contains this text")
+    ap.add_argument("--out", type=Path, default=RESULTS, help=f"results file (default {RESULTS})")
     args = ap.parse_args(argv)
     n = args.frames
     white = {"kind": "white"}
     gm = {"kind": "gaussian_mixture", "impulse_probability": 2e-3, "impulse_power_ratio": 1000.0}
     alpha = {"kind": "alpha_stable", "alpha": 1.7}
-    rows = [
-        ("deep, white, 6 dB", _row(n, 6.0, noise=white)),
-        ("deep, white, 12 dB", _row(n, 12.0, noise=white)),
-        ("deep, white, 20 dB", _row(n, 20.0, noise=white)),
-        ("deep, Gaussian mixture, 12 dB", _row(n, 12.0, noise=gm)),
-        ("deep, alpha-stable 1.7, 12 dB", _row(n, 12.0, noise=alpha)),
-        ("deep, Gaussian mixture, 12 dB, no blanking",
-         _row(n, 12.0, noise=gm, settings=ReceiverSettings(decode=True, blank_impulses=False))),
-        ("single path, white, 12 dB", _row(n, 12.0, noise=white, echoes=False)),
-        ("single path, white, 12 dB, no blanking",
-         _row(n, 12.0, noise=white, echoes=False, settings=ReceiverSettings(decode=True, blank_impulses=False))),
+    no_blank = ReceiverSettings(decode=True, blank_impulses=False)
+    specs = [
+        ("deep, white, 6 dB", dict(snr_db=6.0, noise=white)),
+        ("deep, white, 12 dB", dict(snr_db=12.0, noise=white)),
+        ("deep, white, 20 dB", dict(snr_db=20.0, noise=white)),
+        ("deep, Gaussian mixture, 6 dB", dict(snr_db=6.0, noise=gm)),
+        ("deep, Gaussian mixture, 12 dB", dict(snr_db=12.0, noise=gm)),
+        ("deep, alpha-stable 1.7, 6 dB", dict(snr_db=6.0, noise=alpha)),
+        ("deep, alpha-stable 1.7, 12 dB", dict(snr_db=12.0, noise=alpha)),
+        ("deep, Gaussian mixture, 12 dB, no blanking", dict(snr_db=12.0, noise=gm, settings=no_blank)),
+        ("single path, white, 12 dB", dict(snr_db=12.0, noise=white, echoes=False)),
+        ("single path, white, 12 dB, no blanking", dict(snr_db=12.0, noise=white, echoes=False, settings=no_blank)),
     ]
+    if args.only == "speed":
+        return _speed(args.out)
+    rows = [(name, _row(n, **kw)) for name, kw in specs if args.only is None or args.only in name]
     out = [f"# bench_doppler_paths: {n} frames per row, jmse2024, T_com {PERIOD} s, in-band SNR (SPEC §1), "
            "through the project's channel simulator (geometry mode); errors against its direct-path truth\n"]
     out.append("## Direct-path v_r (record's v_r_mps) and the tone ML, against truth\n")
     out.append("| row | echoes delay / Doppler spread | v_r source | RMSE mm/s | bias mm/s | worst mm/s | "
-               "bound (median CRLB) mm/s | RMSE/bound | tone RMSE mm/s | tone worst mm/s | CRC ok | BER | "
-               "blanked | real time |")
-    out.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+               "bound (median CRLB) mm/s | RMSE/bound | tone RMSE mm/s | tone worst mm/s | range RMSE mm | "
+               "CRC ok | raw BER | BER | eq SNR dB | blanked | real time |")
+    out.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     calib = []
     for name, c in rows:
         ev = c["v_r_mps"] - c["v_true"]
@@ -143,21 +155,54 @@ def main(argv=None):
         out.append(
             f"| {name} | {1e3 * np.median(c['delay']):.1f} ms / {1e3 * np.median(c['spread']):.0f} mm/s | {sources} | "
             f"{1e3 * rms:.2f} | {1e3 * bias:+.2f} | {1e3 * worst:.2f} | {1e3 * bound:.2f} | {rms / bound:.2f} | "
-            f"{1e3 * np.sqrt(np.mean(et**2)):.1f} | {1e3 * np.max(np.abs(et)):.1f} | {np.mean(c['crc']):.2f} | "
-            f"{np.nanmean(c['ber']):.1e} | {np.nanmean(c['blanked_fraction']):.1e} | {c['rt']:.1f}x |"
+            f"{1e3 * np.sqrt(np.mean(et**2)):.1f} | {1e3 * np.max(np.abs(et)):.1f} | "
+            f"{1e3 * np.sqrt(np.mean(er**2)):.2f} | {np.mean(c['crc']):.2f} | {np.nanmean(c['raw_ber']):.1e} | "
+            f"{np.nanmean(c['ber']):.1e} | {np.nanmedian(c['eq_snr_db']):.2f} | "
+            f"{np.nanmean(c['blanked_fraction']):.1e} | {c['rt']:.1f}x |"
         )
         for what, err, sig in (("v_r", ev, c["sigma_v_r_mps"]), ("range", er, c["sigma_range_m"])):
             r_rms, _, _, within, ratio = _stats(err, sig)
             calib.append(f"| {name} | {what} | {len(err)} | {within[0]:.2f} | {within[1]:.2f} | {within[2]:.2f} | "
                          f"{ratio:.2f} |")
+    out.append("\nreal time: recording duration over the wall time of `Receiver.run` with decoding, on the shared "
+               "2-core machine (see `--only speed` for CPU-time factors).")
     out.append("\n## Calibration of the record's σ (goal: ≥ 0.95 within 2σ, ≥ 0.99 within 3σ, median σ / RMS in [0.5, 2])\n")
     out.append("| row | column | frames | within 1σ | within 2σ | within 3σ | median σ / RMS error |")
     out.append("|---|---|---|---|---|---|---|")
     out += calib
     text = "\n".join(out) + "\n"
     print(text)
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text(text, encoding="utf-8")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(text, encoding="utf-8")
+    return 0
+
+
+def _speed(path: Path, n: int = 40) -> int:
+    """Real-time factors (recording duration / processing time), wall and CPU, after a warm-up run."""
+    lines = [f"# bench_doppler_paths --only speed: {n} frames, T_com {PERIOD} s, jmse2024 at {FS:.0f} Hz, 12 dB, "
+             "65536-sample blocks, after a warm-up run (steady state); shared 2-core machine\n",
+             "| recording | receiver | real time (wall) | real time (CPU) |", "|---|---|---|---|"]
+    for echoes, label in ((False, "clean, single path"), (True, "deep, surface and bottom echoes")):
+        sim, t_emit, _ = _simulate(n, 12.0, noise={"kind": "white"}, echoes=echoes)
+        blocks = [sim.output[i : i + 65536] for i in range(0, len(sim.output), 65536)]
+        for decode in (False, True):
+            for blank in (True, False):
+                def run():
+                    rx = Receiver(CFG, emissions=Emissions(times_s=t_emit),
+                                  settings=ReceiverSettings(decode=decode, blank_impulses=blank))
+                    w, c = time.perf_counter(), time.process_time()
+                    list(rx.run(blocks, fs=FS))
+                    return time.perf_counter() - w, time.process_time() - c
+                run()
+                wall, cpu = run()
+                duration = len(sim.output) / FS
+                what = ("measurement and decoding" if decode else "measurement only") + ("" if blank else ", no blanking")
+                lines.append(f"| {label} | {what} | {duration / wall:.1f}x | {duration / cpu:.1f}x |")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    path = path if path != RESULTS else RESULTS.with_name("bench_doppler_paths_speed.txt")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
     return 0
 
 

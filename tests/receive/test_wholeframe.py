@@ -80,7 +80,7 @@ def test_clicks_at_known_positions_do_not_move_the_estimate_beyond_its_sigma():
     raw = _fit(xc, ta)
     blanked, fraction = blank_impulses(xc)
     fit = _fit(blanked, ta)
-    # 60 clicks of ≲ 40 samples + 2·16 guard in 48 000 samples: at most 4.5 %
+    # 60 clicks blanked while above 2.5σ and as long again (≈ 50 samples each) in 48 000 samples: at most 72 each
     assert 0 < fraction <= 60 * 72 / len(xc)
     # blanked: within the clean frame's σ of the clean estimate, for the direct path
     assert abs(fit.v_mps[0] - clean.v_mps[0]) <= clean.sigma_v_mps[0]
@@ -88,17 +88,39 @@ def test_clicks_at_known_positions_do_not_move_the_estimate_beyond_its_sigma():
     assert raw.sigma_v_mps[0] > 1.5 * fit.sigma_v_mps[0]
 
 
-def test_blanker_zeroes_an_impulse_and_its_guard_only():
+def test_blanker_zeroes_an_impulse_and_its_stretch_only():
     x = np.random.default_rng(0).standard_normal(20_000)
     x[5000] = 80.0
-    b = ImpulseBlanker(guard=16)
+    b = ImpulseBlanker()
     y = np.concatenate([b.push(x[:7000]), b.push(x[7000:]), b.flush()])
     assert len(y) == len(x)
-    assert np.all(y[4984:5017] == 0.0)
+    # a lone impulse sample: it, the envelope's ±1 neighbours (none above 2.5σ here) and a one-sample tail
+    assert np.all(np.abs(x[4998:5003]) < 2.5 * np.array([1, 1, 80, 1, 1]))
+    assert np.all(y[4999:5003] == 0.0)
     untouched = np.ones(len(x), bool)
-    untouched[4984:5017] = False
+    untouched[4999:5003] = False
     np.testing.assert_array_equal(y[untouched], x[untouched])
-    assert b.blanked_fraction(0, 20_000) == pytest.approx(33 / 20_000)
+    assert b.blanked_fraction(0, 20_000) == pytest.approx(4 / 20_000)
+    # with a guard, that many more either side, whatever the block boundaries
+    g = ImpulseBlanker(guard=16)
+    y = np.concatenate([g.push(x[:5002]), g.push(x[5002:]), g.flush()])
+    assert np.all(y[4983:5019] == 0.0) and y[4982] == x[4982] and y[5019] == x[5019]
+
+
+def test_blanker_stretch_covers_a_ringing_click_and_not_beyond():
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal(20_000)
+    n = np.arange(60)
+    click = 31.6 * np.exp(-n / 10) * np.cos(2 * np.pi * 0.3 * n + 1.0)
+    x[8000:8060] += click
+    y, _ = blank_impulses(x)
+    blanked = np.flatnonzero(y == 0.0)
+    # one stretch, from the onset to where the decay falls below ≈ 2.5σ (31.6·e^(−n/10) = 2.5 at n ≈ 25),
+    # and as long again for the tail
+    assert blanked[0] >= 7999 and np.all(np.diff(blanked) == 1)
+    assert 36 <= len(blanked) <= 60
+    # what is left of the click is below the noise (31.6·e^(−3.6) ≈ 0.9σ)
+    assert np.max(np.abs(click[blanked[-1] - 8000 + 1 :])) < 1.0
 
 
 def test_blanker_leaves_white_noise_and_a_frame_onset_alone():
