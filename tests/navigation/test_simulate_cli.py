@@ -29,11 +29,11 @@ def _rows(folder):
 def test_default_runs_the_inertial_filter_and_prints_no_unstable_row(tmp_path, capsys, short_path):
     assert main(["nav", "simulate", "--tcom", "3", "6", "--runs", "6", "-q", "-o", str(tmp_path / "sim")]) == 0
     rows = _rows(tmp_path / "sim")
-    assert [(r["tcom_s"], r["filter"]) for r in rows] == [("3.0", "inertial"), ("3.0", "inertial_range"),
-                                                          ("6.0", "inertial"), ("6.0", "inertial_range")]
+    assert [(r["tcom_s"], r["filter"]) for r in rows] == [("3.0", "inertial"), ("6.0", "inertial")]
     assert all(r["diverged"] == "0" for r in rows)
     out = capsys.readouterr().out
     assert "UNSTABLE" not in out and "per estimator" in out
+    assert "noise: range 0.01 m, v_r 0.02 m/s" in out and "at its own noise" in out  # receiver-grade, said so
     assert (tmp_path / "sim" / "fig7_top_view.png").exists() and (tmp_path / "sim" / "fig8_error.png").exists()
 
 
@@ -56,6 +56,15 @@ def test_unstable_rows_are_flagged_not_presented(tmp_path, capsys):
     assert int(rows["proposed"]["diverged"]) > 0 and rows["inertial"]["diverged"] == "0"
     out = capsys.readouterr().out
     assert re.search(r"UNSTABLE +\d+/8", out) and "not results" in out
+
+
+def test_paper_noise_and_array_bearing_options(tmp_path, capsys, short_path):
+    assert main(["nav", "simulate", "--paper-noise", "--sigma-bearing", "1", "--tcom", "3", "--runs", "5", "-q",
+                 "-o", str(tmp_path / "b")]) == 0
+    out = capsys.readouterr().out
+    assert "noise: range 3.46 m, v_r 0.447 m/s" in out and "array bearing 1 deg" in out
+    assert main(["nav", "simulate", "--sigma-bearing", "-1", "--runs", "5", "-o", str(tmp_path / "n")]) != 0
+    assert "--sigma-bearing" in capsys.readouterr().err and not (tmp_path / "n").exists()
 
 
 def test_error_of_is_refused_for_the_inertial_filter(capsys):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 from dataclasses import asdict, replace
 from pathlib import Path
 
@@ -32,9 +33,10 @@ def add_parser(sub) -> None:
             "Simulate RUNS boustrophedon missions per T_com (paper 000 §4.1) for each estimator, print the mean "
             "position error per T_com beside the paper's Table 3-4 values, with outliers and diverged runs "
             "counted, and write DIR/table.csv, DIR/table.txt, DIR/config.json and the figures "
-            "DIR/fig7_top_view.png, DIR/fig8_error.png. Default: the inertial filter with and without v_r, "
-            "the controller steering on the estimate. --paper runs the paper-faithful reproduction "
-            "(paper 000's EKF and ROSB, eq 25, steering on the truth)."
+            "DIR/fig7_top_view.png, DIR/fig8_error.png. Default: the inertial filter, the controller steering on "
+            "the estimate, receiver-grade noise (range 1 cm, v_r 2 cm/s: what seamodem's receiver measures, "
+            "with margin). --paper-noise uses paper 000's noise (3.46 m, 0.447 m/s); --paper runs the "
+            "paper-faithful reproduction (paper 000's EKF and ROSB, eq 25, its noise, steering on the truth)."
         ),
     )
     s.add_argument("--tcom", type=float, nargs="+", default=[3, 6, 9, 12, 15, 20], metavar="S",
@@ -42,11 +44,15 @@ def add_parser(sub) -> None:
     s.add_argument("--runs", type=int, default=300, help="missions per row (default 300)")
     s.add_argument("--seed", type=int, default=0, help="seed; run r uses default_rng([seed, r]) (default 0)")
     s.add_argument("--filters", nargs="+", choices=SIM_FILTERS, metavar="NAME",
-                   help="estimators: " + ", ".join(SIM_FILTERS) + " (default: inertial inertial-range; "
-                        "fixed-lag and batch smooth the inertial filter's mission; proposed and rosb are paper "
-                        "000's EKFs)")
+                   help="estimators: " + ", ".join(SIM_FILTERS) + " (default: inertial; inertial-range is "
+                        "the same filter without v_r; fixed-lag and batch smooth the inertial filter's mission; "
+                        "proposed and rosb are paper 000's EKFs)")
     s.add_argument("--paper", action="store_true",
-                   help="paper-faithful reproduction of Tables 3-4: --filters proposed rosb --steer truth")
+                   help="paper-faithful reproduction of Tables 3-4: --filters proposed rosb --steer truth "
+                        "--paper-noise")
+    s.add_argument("--paper-noise", action="store_true",
+                   help="paper 000's measurement noise, range √12 = 3.46 m and v_r √0.2 = 0.447 m/s (eq 25's R); "
+                        "the default is receiver-grade, 0.01 m and 0.02 m/s")
     s.add_argument("--steer", choices=("estimate", "truth"),
                    help="the controller steers on the filter's estimate (a real vehicle; default) or on the truth "
                         "(default with --paper)")
@@ -54,8 +60,16 @@ def add_parser(sub) -> None:
                    help="heading bias of 5 deg/h as a random walk (default) or a constant drift rate per run")
     s.add_argument("--lag", type=float, default=10.0, metavar="S",
                    help="latency of the fixed-lag smoother [s] (default 10)")
-    s.add_argument("--sigma-range", type=float, metavar="M", help="emulated range noise [m] (default √12 = 3.46)")
-    s.add_argument("--sigma-vr", type=float, metavar="MPS", help="emulated v_r noise [m/s] (default √0.2 = 0.447)")
+    s.add_argument("--sigma-range", type=float, metavar="M",
+                   help="emulated range noise [m] (default 0.01; 3.46 with --paper or --paper-noise)")
+    s.add_argument("--sigma-vr", type=float, metavar="MPS",
+                   help="emulated v_r noise [m/s] (default 0.02; 0.447 with --paper or --paper-noise)")
+    s.add_argument("--sigma-bearing", type=float, default=0.0, metavar="DEG",
+                   help="a hydrophone array's body-frame azimuth of the beacon per frame, its noise [deg] "
+                        "(default 0: no array); the inertial filters and smoothers use it")
+    s.add_argument("--gate", type=float, choices=(0.99, 0.999, 0.9999, 0.99999), metavar="P",
+                   help="chi2 gate of the inertial filter's acoustic updates (default none: the simulated "
+                        "measurements have no outliers; nav track gates records at 0.9999)")
     s.add_argument("--matched-r", action="store_true",
                    help="set the filter's R for range and v_r to the emulated variances (default: eq 25's 12 and 0.2)")
     s.add_argument("--q", type=float, metavar="VAR",
@@ -161,9 +175,13 @@ def run_simulate(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise SeamodemError(f"--seed: must be >= 0, got {args.seed}")
     filters = tuple(f.replace("-", "_") for f in (args.filters or (("proposed", "rosb") if args.paper
-                                                                   else ("inertial", "inertial-range"))))
+                                                                   else ("inertial",))))
     steer = args.steer or ("truth" if args.paper else "estimate")
-    noise = NoiseModel(heading_bias_model=args.bias_model)
+    if not (args.sigma_bearing >= 0 and math.isfinite(args.sigma_bearing)):
+        raise SeamodemError(f"--sigma-bearing: must be >= 0 deg, got {args.sigma_bearing}")
+    noise = NoiseModel(heading_bias_model=args.bias_model, sigma_bearing_deg=args.sigma_bearing)
+    if not (args.paper or args.paper_noise):  # receiver-grade; NoiseModel's own defaults are the paper's
+        noise = replace(noise, sigma_range_m=0.01, sigma_vr_mps=0.02)
     if args.sigma_range is not None:
         noise = replace(noise, sigma_range_m=args.sigma_range)
     if args.sigma_vr is not None:
@@ -176,6 +194,8 @@ def run_simulate(args: argparse.Namespace) -> int:
                            lag_s=args.lag)
     if args.matched_r:
         config = replace(config, r_diag=(noise.sigma_range_m**2, noise.sigma_vr_mps**2, *config.r_diag[2:]))
+    if args.gate is not None:
+        config = replace(config, inertial=replace(config.inertial_config, gate_probability=args.gate))
     for t in args.tcom:
         replace(config, tcom_s=t)  # validates every T_com before any work
     out.mkdir(parents=True, exist_ok=True)

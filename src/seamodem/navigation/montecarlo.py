@@ -151,6 +151,13 @@ class NoiseModel:
     def inertial_config(self, dt_s: float, **overrides) -> InertialConfig:
         """The inertial filter told the truth about these sensors (densities at the step ``dt_s``).
 
+        The simulated range and v_r have Gaussian errors only, no outliers, so the filter told the truth has no
+        χ² gate (``gate_probability=None``; pass it in ``overrides`` to study the gate). Measured: with the
+        records' default gate (p = 0.9999) the filter gated 15–43 of 23 000 frames per 300 receiver-grade
+        missions at T_com 12–20 s, every one a nonlinearity of the filter near a lane's closest approach and
+        not a bad measurement, and 1 mission in 300 then left the truth by more than 50 m; without the gate
+        the worst mission stayed within 22 m (seeds 0–2).
+
         Random-walk bias: the bias random walk is the stated one. Drifting bias: the drift rate is a state
         with that prior and the bias keeps a small random walk (0.5°/h after one hour) for what a constant
         rate does not describe.
@@ -160,6 +167,7 @@ class NoiseModel:
                          p0_bias_drift_rad_s=max(math.radians(self.heading_drift_deg_per_h), 1e-9) / 3600.0)
         else:
             extra = dict(bias_rw=math.radians(self.heading_drift_deg_per_h) / 60.0)
+        extra["gate_probability"] = None
         return InertialConfig.from_noise_model(self, dt_s, **{**extra, **overrides})
 
 
@@ -673,7 +681,8 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
         f"noise: range {noise.sigma_range_m:.3g} m, v_r {noise.sigma_vr_mps:.3g} m/s, heading "
         f"{noise.sigma_heading_deg:.3g} deg + bias {noise.heading_drift_deg_per_h:.3g} deg/h "
         f"({noise.heading_bias_model.replace('_', ' ')}), gyro {noise.sigma_omega_rad_s:.3g} rad/s, accel "
-        f"{noise.sigma_accel_mps2:.3g} m/s^2",
+        f"{noise.sigma_accel_mps2:.3g} m/s^2"
+        + (f", array bearing {noise.sigma_bearing_deg:.3g} deg" if noise.sigma_bearing_deg > 0 else ""),
     ]
     if any(f in FILTERS for f in ran):
         lines.append(f"paper filters: R = {result.config.r_diag} (d, v_r, psi, omega, a), "
@@ -716,6 +725,10 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
         if paper and t in PAPER_TABLE:
             line += f" | {PAPER_TABLE[t][0]:.2f} / {PAPER_TABLE[t][5]:.2f}"
         lines.append(line)
+    if paper and (abs(noise.sigma_range_m - math.sqrt(EQ25_R["range"])) > 1e-9
+                  or abs(noise.sigma_vr_mps - math.sqrt(EQ25_R["v_r"])) > 1e-9):
+        lines.append(f"(the paper's values are at its own noise, range {math.sqrt(EQ25_R['range']):.3g} m and v_r "
+                     f"{math.sqrt(EQ25_R['v_r']):.3g} m/s; this table is at the noise above)")
     unstable = sum(r["diverged"] for r in result.rows)
     if unstable:
         lines += ["", f"{unstable} run(s) diverged in the rows marked UNSTABLE: those rows are not results "
