@@ -149,18 +149,20 @@ def test_iterated_update_reaches_the_posterior_mode():
 
 def test_outlier_frame_is_gated_and_reported():
     config, _, run = _short_mission(0)
+    gated = replace(run.config, gate_probability=0.9999)  # the records' default; the simulation's filter has none
+    assert InertialConfig().gate_probability == 0.9999 and run.config.gate_probability is None
     nodes = run.nodes
     meas = nodes.meas.copy()
     k = np.flatnonzero(nodes.has_acoustic)[5]
     meas[k, 0] += 50.0
     bad = replace(nodes, meas=meas)
-    rerun = run_filter(bad, run.config, beacon_xy=config.beacon_xy, z0=run.z0, P0=run.P0)
+    rerun = run_filter(bad, gated, beacon_xy=config.beacon_xy, z0=run.z0, P0=run.P0)
     assert rerun.status[k] == 2 and np.all(rerun.status[nodes.has_acoustic][:5] == 1)
     assert np.abs(rerun.states[:, :2] - run.states[:, :2]).max() < 1e-6 or rerun.status[k + 12] == 1
     # three wrong frames in a row: the fourth is accepted (reset), status 3 or 1
     for j in np.flatnonzero(nodes.has_acoustic)[6:9]:
         meas[j, 0] += 50.0
-    rerun = run_filter(replace(nodes, meas=meas), run.config, beacon_xy=config.beacon_xy, z0=run.z0, P0=run.P0)
+    rerun = run_filter(replace(nodes, meas=meas), gated, beacon_xy=config.beacon_xy, z0=run.z0, P0=run.P0)
     frames = np.flatnonzero(nodes.has_acoustic)
     assert list(rerun.status[frames[5:9]]) == [2, 2, 2, 3]  # 3 gated in a row, the 4th forced in
 
