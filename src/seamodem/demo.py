@@ -22,6 +22,13 @@ The whole chain, offline, in well under a minute:
    emulated from the geometry with the noise levels the receiver actually
    showed (its RMS errors against the truth): what a simulation without the
    waveform would predict.
+7. **hydrophone array** (``array``, ``seamodem demo --array SPEC``) — the same
+   beacon recorded by a small array on the vehicle (:func:`seamodem.channel.array.simulate_array`,
+   the same SNR per element), received with :func:`seamodem.receive.array.receive_array`
+   (detection and decoding on all channels, direction of arrival per frame)
+   beside one of its hydrophones alone: frames found and decoded, range, the
+   beacon's body azimuth against the truth, and the position of a one-frame
+   fix (range + body azimuth + the AHRS heading + depth) with no filter.
 
 Every step is a function here, so ``examples/mission_demo.py`` can run them one
 by one. :func:`run_demo` chains them and writes the outputs.
@@ -56,6 +63,7 @@ __all__ = [
     "navigate",
     "emulate_measurements",
     "run_demo",
+    "array_mission",
     "format_summary",
 ]
 
@@ -105,6 +113,10 @@ class DemoConfig:
         AHRS/IMU noise (as :class:`seamodem.navigation.NoiseModel`).
     seed : int
         Seeds the IMU noise, the channel's noise and the emulated measurements.
+    array : str or None
+        A hydrophone array (a preset such as ``tetra:0.08`` or a TOML/JSON file,
+        as ``seamodem channel --array``): also run the mission's recording
+        through it (step 7). None: one hydrophone only.
     """
 
     preset: str = "jmse2024"
@@ -127,9 +139,16 @@ class DemoConfig:
     sigma_omega_rad_s: float = math.sqrt(0.005)
     sigma_accel_mps2: float = math.sqrt(0.005)
     seed: int = 1
+    array: str | None = None
 
     def __post_init__(self):
         get_preset(self.preset)  # raises ConfigError naming the preset
+        if self.array is not None:
+            from .channel.array import load_array
+            from .receive.array import array_geometry
+
+            a = load_array(self.array)  # raises naming the array
+            array_geometry(a.element_positions_m, a.assume)
         for name in ("tcom_s", "lane_length_m", "width_m", "speed_mps", "depth_m", "water_depth_m",
                      "sound_speed_mps", "dt_s"):
             value = getattr(self, name)
@@ -368,6 +387,95 @@ def navigate(meas: dict, vehicle: VehicleRun, cfg: DemoConfig, *, filter: str) -
     return {"t_s": t, "xy_m": state[:, :2], "error_m": error}
 
 
+def array_mission(cfg: DemoConfig, vehicle: VehicleRun, folder: Path, sidecar: dict) -> tuple[list, dict]:
+    """Step 7: the beacon in ``folder``/beacon.wav through ``cfg.array`` along the vehicle's track.
+
+    The array recording (same scenario, seed and SNR per element as the
+    single hydrophone's) is received twice: by :func:`~seamodem.receive.array.receive_array`
+    on all channels, and by the single-hydrophone receiver on element 0 alone.
+
+    Returns
+    -------
+    records : list of MeasurementRecord
+        The array receiver's (with ``azimuth_body_rad`` …).
+    summary : dict
+        Both receivers' frames found, CRC ok, range RMSE; the array's azimuth
+        error against the truth (RMS, median σ, share within 3σ) and the
+        one-frame fix's horizontal error (range + body azimuth + the AHRS
+        heading at the frame + the true depth).
+    """
+    import soundfile
+
+    from .channel import parse_scenario
+    from .channel.array import load_array, simulate_array
+    from .io.sidecar import sidecar_payloads
+    from .navigation.bearing import single_frame_fix
+    from .receive import Emissions, Receiver
+    from .receive.array import receive_array
+
+    array = load_array(cfg.array)
+    config = cfg.frame_config
+    x, fs = soundfile.read(str(Path(folder) / "beacon.wav"), dtype="float64")
+    times = np.array([f["t_emit_s"] for f in sidecar["frames"]])
+    scenario = parse_scenario(make_scenario(cfg, Path(folder) / "vehicle_track.csv"), base_dir=folder)
+    sim = simulate_array(x, fs, scenario, array, t_emit_s=times, frame_duration_s=config.frame_duration_s,
+                         band_hz=config.data_band_hz)
+    del x
+    settings = receiver_settings(sidecar)
+    payloads = sidecar_payloads(sidecar)
+    emissions = Emissions(times_s=times)
+    records, _ = receive_array(sim.output, fs, config, array.element_positions_m, emissions=emissions,
+                               settings=settings, complex_gains=array.complex_gains,
+                               position_sigma_m=array.position_sigma_m, payloads=payloads, assume=array.assume)
+    one = list(Receiver(config, emissions=emissions, settings=settings, payloads=payloads).run([sim.output[:, 0]], fs=fs))
+    truth = {row["frame_index"]: row for row in sim.truth}
+    sent = {f["frame_index"]: f["payload_hex"] for f in sidecar["frames"]}
+
+    c = settings.sound_speed_mps
+
+    def receiver_summary(recs, element=None):
+        """Frames, FER and range RMSE; one element's range is to that element (the array's to its body origin)."""
+        matched = [(r, truth[r.frame_index]) for r in recs if r.frame_index in truth]
+        ok = [r for r, _ in matched if r.crc_ok and r.payload_hex == sent.get(r.frame_index)]
+        lever = [0.0 if element is None else c * (t["element_t_arrival_s"][element] - t["t_arrival_s"])
+                 for _, t in matched]
+        return {"frames_detected": len(recs), "payloads_correct": len(ok),
+                "fer": 1.0 - len(ok) / max(len(truth), 1),
+                "range_rmse_m": _rms([r.range_m - t["range_m"] - d for (r, t), d in zip(matched, lever)])}
+
+    az_err, z_az, fix_err = [], [], []
+    for r in records:
+        row = truth.get(r.frame_index)
+        if row is None or not math.isfinite(r.azimuth_body_rad):
+            continue
+        e = math.remainder(r.azimuth_body_rad - row["paths"][0]["azimuth_body_rad"], 2 * math.pi)
+        az_err.append(e)
+        z_az.append(abs(e) / r.sigma_azimuth_body_rad)
+        heading = float(np.interp(r.t_arrival_s, vehicle.imu["t_s"], np.unwrap(vehicle.imu["heading_rad"])))
+        fix = single_frame_fix(r.range_m, r.azimuth_body_rad, heading, [*cfg.beacon_xy_m, -cfg.depth_m],
+                               sigma_range_m=r.sigma_range_m, sigma_azimuth_rad=r.sigma_azimuth_body_rad,
+                               sigma_heading_rad=math.radians(cfg.sigma_heading_deg), z_m=-cfg.depth_m)
+        true_xy = [np.interp(r.t_arrival_s, vehicle.t_s, vehicle.xy_m[:, i]) for i in (0, 1)]
+        fix_err.append(float(np.hypot(fix.x_m - true_xy[0], fix.y_m - true_xy[1])))
+    summary = {
+        "spec": cfg.array,
+        "n_elements": int(array.n_elements),
+        "aperture_m": array.aperture_m,
+        "array": receiver_summary(records),
+        "one_hydrophone": receiver_summary(one, element=0),
+        "azimuth_rmse_deg": math.degrees(_rms(az_err)),
+        "azimuth_sigma_median_deg": math.degrees(float(np.median([r.sigma_azimuth_body_rad for r in records])))
+        if records else math.nan,
+        "azimuth_within_3_sigma": float(np.mean(np.array(z_az) <= 3)) if z_az else math.nan,
+        "one_frame_fix_median_error_m": float(np.median(fix_err)) if fix_err else math.nan,
+        "one_frame_fix_rms_error_m": _rms(fix_err),
+        "definition": "same beacon, scenario and SNR per element; one hydrophone = element 0 of the array recording "
+                      "(its range against the range to that element, the array's against the body origin's); "
+                      "one-frame fix = range + body azimuth + AHRS heading + true depth, no filter",
+    }
+    return records, summary
+
+
 @dataclass
 class DemoResult:
     """What :func:`run_demo` measured (``summary`` is also written as ``summary.json``)."""
@@ -422,6 +530,8 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         records, grabbed = receive(audio / "received.wav", sidecar, grab_frame=grab_at)
         clock["receiver"] = time.perf_counter()
         psd = _psd(audio / "received.wav", sidecar) if plots else None
+        array_records, array_summary = array_mission(cfg, vehicle, audio, sidecar) if cfg.array else (None, None)
+        clock["array"] = time.perf_counter()
     truth = sidecar["truth"]
     errs = measurement_errors(records, truth)
     sigma_r, sigma_v = _rms(errs["range_error_m"]), _rms(errs["v_r_error_mps"])
@@ -473,9 +583,12 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         "wall_time_s": {
             "vehicle_beacon_channel": clock["channel"] - clock["start"],
             "receiver_decoder": clock["receiver"] - clock["channel"],
-            "navigation": clock["navigation"] - clock["receiver"],
+            "navigation": clock["navigation"] - clock["array"],
         },
     }
+    if array_summary is not None:
+        summary["array"] = array_summary
+        summary["wall_time_s"]["array"] = clock["array"] - clock["receiver"]
 
     files = []
     (out / "demo_config.json").write_text(json.dumps(
@@ -494,6 +607,12 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         _write_csv(out / f"track_{f}.csv", {"t_s": tr["t_s"], "x_m": tr["xy_m"][:, 0], "y_m": tr["xy_m"][:, 1],
                                              "error_m": tr["error_m"]})
     files += ["demo_config.json", "measurements.csv", "measurements.csv.json", "imu.csv", "truth.csv"]
+    if array_records is not None:
+        from .channel.array import load_array
+
+        write_measurements(out / "measurements_array.csv", array_records,
+                           header | {"array": {"spec": cfg.array, **load_array(cfg.array).to_dict()}})
+        files += ["measurements_array.csv", "measurements_array.csv.json"]
     files += [f"track_{f}.csv" for f in FILTERS]
     if plots:
         plot_map(out / "map.png", cfg, vehicle, tracks, summary)
@@ -558,9 +677,25 @@ def format_summary(summary: dict) -> str:
         cells = [pos[source][f] for f in FILTERS]
         lines.append(f"  {labels[source]:34}" + "".join(
             f" {c['mean_error_m']:>8.2f} / {c['rms_error_m']:.2f} / {c['final_error_m']:.2f}" for c in cells))
+    if "array" in s:
+        a = s["array"]
+        lines += [
+            f"hydrophone array {a['spec']} ({a['n_elements']} elements, {100 * a['aperture_m']:.0f} cm), same SNR per "
+            "element, beside one of its hydrophones:",
+            f"  frames detected {a['one_hydrophone']['frames_detected']} -> {a['array']['frames_detected']}, payloads "
+            f"correct {a['one_hydrophone']['payloads_correct']} -> {a['array']['payloads_correct']} (FER "
+            f"{a['one_hydrophone']['fer']:.2f} -> {a['array']['fer']:.2f}), range RMSE "
+            f"{100 * a['one_hydrophone']['range_rmse_m']:.2f} -> {100 * a['array']['range_rmse_m']:.2f} cm",
+            f"  beacon body azimuth vs truth: RMSE {a['azimuth_rmse_deg']:.2f} deg (median sigma "
+            f"{a['azimuth_sigma_median_deg']:.2f} deg, {100 * a['azimuth_within_3_sigma']:.0f} % within 3 sigma)",
+            f"  one-frame fix (range + azimuth + AHRS heading + depth, no filter): median error "
+            f"{a['one_frame_fix_median_error_m']:.2f} m, RMS {a['one_frame_fix_rms_error_m']:.2f} m",
+        ]
     w = s["wall_time_s"]
     lines.append(f"wall time: {w.get('total', math.nan):.1f} s (beacon + channel {w['vehicle_beacon_channel']:.1f} s, "
-                 f"receiver + decoder {w['receiver_decoder']:.1f} s, filters {w['navigation']:.1f} s)")
+                 f"receiver + decoder {w['receiver_decoder']:.1f} s, "
+                 + (f"array {w['array']:.1f} s, " if "array" in w else "")
+                 + f"filters {w['navigation']:.1f} s)")
     return "\n".join(lines)
 
 

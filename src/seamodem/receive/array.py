@@ -757,7 +757,8 @@ class ArrayDetector:
     def statistics(self, r: np.ndarray):
         """z (= Z), ρ, best bin and √Z for every full-overlap lag of the basebands r (n, K).
 
-        ρ is computed where Z ≥ η only (elsewhere 0: those lags fail the z test anyway).
+        ρ is computed at the local maxima of Z above η only (elsewhere 0: the
+        lags the detector takes for arrivals and strongest paths are such maxima).
         """
         import scipy.fft
 
@@ -765,23 +766,30 @@ class ArrayDetector:
         K = r.shape[1]
         n_out = r.shape[0] - b.length + 1
         n = scipy.fft.next_fast_len(r.shape[0])
-        spectrum = scipy.fft.fft(r.astype(np.complex64), n, axis=0)
+        # channels along the first axis: each FFT runs on contiguous samples
+        spectrum = scipy.fft.fft(np.ascontiguousarray(r.T, dtype=np.complex64), n, axis=-1)
         pilot = np.conj(scipy.fft.fft(b.template.astype(np.complex64), n))
         shifts = np.round(b.doppler_hz * n / b.fs).astype(np.int64)
-        corr = np.empty((len(shifts), n_out, K), np.complex64)
+        corr = np.empty((len(shifts), K, n_out), np.complex64)
+        power = np.empty((len(shifts), K, n_out), np.float32)
         for i, m in enumerate(shifts):
-            corr[i] = scipy.fft.ifft(spectrum * np.roll(pilot, m)[:, None], axis=0, overwrite_x=True)[:n_out]
-        power = corr.real**2 + corr.imag**2
-        noise = np.median(power[:, ::4, :].reshape(-1, K), axis=0) / math.log(2)
-        noise = np.maximum(noise, 1e-6 * np.max(power, axis=(0, 1)))  # a noiseless recording keeps Z finite
-        zb = np.einsum("bjk,k->bj", power, 1.0 / np.maximum(noise, np.finfo(np.float32).tiny))
+            corr[i] = scipy.fft.ifft(spectrum * np.roll(pilot, m)[None, :], axis=-1, overwrite_x=True)[:, :n_out]
+            np.abs(corr[i], out=power[i])
+        power *= power
+        noise = np.median(power[:, :, ::4].transpose(1, 0, 2).reshape(K, -1), axis=1) / math.log(2)
+        noise = np.maximum(noise, 1e-6 * np.max(power, axis=(0, 2)))  # a noiseless recording keeps Z finite
+        zb = np.einsum("bkj,k->bj", power, (1.0 / np.maximum(noise, np.finfo(np.float32).tiny)).astype(np.float32))
         best = np.argmax(zb, axis=0)
         lag = np.arange(n_out)
         z = zb[best, lag].astype(float)
         rho = np.zeros(n_out)
-        hit = np.flatnonzero(z >= b.eta)
+        # ρ at the local maxima of Z above η only: the detector's arrivals and strongest paths are such peaks
+        peak = np.ones(n_out, bool)
+        peak[1:] &= z[1:] >= z[:-1]
+        peak[:-1] &= z[:-1] >= z[1:]
+        hit = np.flatnonzero((z >= b.eta) & peak)
         if hit.size:
-            rho[hit] = self._coherent_rho(r, corr[best[hit], hit, :], hit)
+            rho[hit] = self._coherent_rho(r, corr[best[hit], :, hit], hit)
         return z, rho, best, np.sqrt(z)
 
     def _coherent_rho(self, r: np.ndarray, c: np.ndarray, lags: np.ndarray) -> np.ndarray:
@@ -799,12 +807,13 @@ class ArrayDetector:
         b = self.base
         K = r.shape[1]
         L = b.length
-        prod = (r[:, :, None] * np.conj(r[:, None, :])).reshape(r.shape[0], K * K)
         out = np.empty(len(lags))
         for s0 in range(0, len(lags), 4096):  # bounded memory: cumulative Gram sums per block of lags
             j = lags[s0:s0 + 4096]
             lo, hi = int(j[0]), int(j[-1]) + L
-            cs = np.concatenate([np.zeros((1, K * K), complex), np.cumsum(prod[lo:hi], axis=0)])
+            seg = r[lo:hi]
+            prod = (seg[:, :, None] * np.conj(seg[:, None, :])).reshape(hi - lo, K * K)
+            cs = np.concatenate([np.zeros((1, K * K), complex), np.cumsum(prod, axis=0)])
             M = (cs[j - lo + L] - cs[j - lo]).reshape(len(j), K, K)
             M = M + (1e-9 * np.real(np.trace(M, axis1=1, axis2=2)) / K + np.finfo(float).tiny)[:, None, None] * np.eye(K)
             cj = c[s0:s0 + 4096].astype(complex)
