@@ -28,8 +28,8 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--array",
         metavar="SPEC",
-        help="a hydrophone array on the vehicle (geometry scenarios): tetra[:APERTURE_M], circleN[:APERTURE_M] or "
-        "a TOML/JSON file with an [array] table; OUT.wav gets one channel per element and the truth each path's "
+        help="a hydrophone array on the vehicle (geometry scenarios): tetra[:APERTURE_M], circleN[:APERTURE_M], "
+        "lineN[:APERTURE_M] or a TOML/JSON file with an [array] table; OUT.wav gets one channel per element and the truth each path's "
         "azimuth/elevation (see docs/array.md)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
