@@ -84,6 +84,8 @@ ELSEWHERE = {
     "seamodem channel beacon.wav --scenario S.toml --array tetra:0.08 -o rx.wav":
         "tests/array/test_array_cli.py (S.toml is the user's scenario; the test writes one)",
     "seamodem rx rx.wav --array tetra:0.08 -o m.csv": "tests/array/test_array_cli.py",
+    "seamodem demo --array tetra:0.08 -o demo_array":
+        "tests/array/test_array_demo.py runs it with --duration 12 (the whole survey takes minutes)",
     "seamodem tx --reference lfm:19000-29000:0.05 --count 5 --period 2 --start 0.3 -o pings.wav":
         "tests/reference/test_reference_docs.py runs docs/references.md's block as written",
     "seamodem rx pings.wav --reference pings.json -o pings_meas.csv": "tests/reference/test_reference_docs.py",
