@@ -388,6 +388,35 @@ FIRST_PATH_FRACTION = 0.3
 MAX_ECHOES = 2
 #: an echo is fitted when its residual correlation exceeds this many times the noise (|c|²/(σ² E_q))
 ECHO_Z = 30.0
+#: scales across ±v_max/c at which a chirp's paths are sought before its Doppler is refined
+SCAN_POINTS = 5
+#: the same for a path before the fitted one (a handful of lags are searched there: a lower threshold)
+EARLY_Z = 16.0
+
+
+def _real_normal_equations(m: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Re(M Mᴴ) and Re(M* r): the normal equations of real parameters of a complex model, M (k, n).
+
+    As real products of [Re M, Im M] (k, 2n): a complex matrix product of these shapes goes to a threaded
+    BLAS kernel that takes milliseconds on a loaded machine, a hundred times the real one.
+    """
+    mm = np.concatenate([m.real, m.imag], axis=1)
+    return mm @ mm.T, mm @ np.concatenate([resid.real, resid.imag])
+
+
+_SIDELOBES: dict[tuple, float] = {}
+
+
+def _peak_sidelobe(replica: Replica, fs: float, carrier_hz: float) -> float:
+    """Largest |autocorrelation|² of the sampled replica beyond ±1/B, over its peak (computed once per replica)."""
+    key = (id(replica), fs, carrier_hz)
+    if key not in _SIDELOBES:
+        p = _replica_samples(replica, fs, carrier_hz, 0.0)
+        n = scipy.fft.next_fast_len(2 * len(p))
+        a = np.abs(scipy.fft.ifft(np.abs(scipy.fft.fft(p, n)) ** 2)) ** 2
+        lag = np.minimum(np.arange(n), n - np.arange(n)) / fs
+        _SIDELOBES[key] = float(np.max(a[lag > 1.0 / replica.reference.bandwidth_hz]) / a[0])
+    return _SIDELOBES[key]
 
 
 class _PathFitter:
@@ -419,16 +448,20 @@ class _PathFitter:
         m = np.stack(cols)
         resid = x - a * q
         # real least squares on (Re, Im) by its normal equations: Re(M Mᴴ) step = Re(M residual*)
-        step = np.linalg.solve(np.real(m @ np.conj(m).T), np.real(np.conj(m) @ resid))
+        step = np.linalg.solve(*_real_normal_equations(m, resid))
         # never jump beyond the main lobe, where the linearisation holds; shrink (t_a, ε) together so that a
         # joint step stays on the delay–Doppler ridge
         shrink = min(1.0, 0.5 / fs / max(abs(step[0]), 1e-300))
         return ta + shrink * step[0], eps + (shrink * step[1] if free_eps else 0.0)
 
-    def fit(self, x, ta0: float, eps0: float, search_eps: float, *, grid: bool) -> tuple[float, float]:
+    def fit(self, x, ta0: float, eps0: float, search_eps: float, *, grid: bool, scan: bool = False) -> tuple[float, float]:
         """ε by dichotomy on the profile likelihood (t_a by Gauss–Newton for each ε), then a joint polish.
 
         ``search_eps`` 0: the joint polish alone (a start already near the optimum: echoes, refits).
+        ``scan``: first the profile on a grid of half the bank's spacing over all of ±limit, and the dichotomy
+        around its best point. A chirp's ridge is nearly flat across the bank (an LFM loses a fraction of a dB
+        between its bins): the detection's bin, picked by the noise and by an echo's ridge beside the direct
+        path's, can be several bins from the truth, and a dichotomy of ±1 bin around it clips the estimate.
         """
         fs, g, limit = self.fs, self.g, self.limit
         if grid:  # a coarse lag is within half a sample: start from the best of a fine grid around it
@@ -443,7 +476,14 @@ class _PathFitter:
 
         # profile likelihood over ε, by dichotomy (paper 002's bank, refined); t_a maximised for each ε
         eps = eps0
-        if search_eps:
+        if search_eps and scan:
+            half = 0.5 * search_eps
+            cand = np.arange(-limit, limit + 0.5 * half, half) if 2 * limit > half else np.array([eps0])
+            eps = float(cand[int(np.argmax([self.corr(x, best_t(e), e) for e in cand]))])
+            eps = dichotomy_max(
+                lambda e: self.corr(x, best_t(e), e), max(eps - half, -limit), min(eps + half, limit), tol=search_eps / 8,
+            )
+        elif search_eps:
             eps = dichotomy_max(
                 lambda e: self.corr(x, best_t(e), e),
                 max(eps0 - search_eps, -limit), min(eps0 + search_eps, limit), tol=search_eps / 8,
@@ -466,6 +506,92 @@ class _PathFitter:
                 break
         return float(ta), float(eps)
 
+    def paths_at(self, x, times: np.ndarray, eps: float, *, steps: int = 2) -> tuple[np.ndarray, np.ndarray, float]:
+        """Several paths at one common scale ε: their arrivals by joint Gauss–Newton, gains, and the energy explained.
+
+        x ≈ Σ_p A_p q(t_p, ε): the gains by least squares, the arrivals by Gauss–Newton steps on the joint
+        model (an echo's sidelobe is then part of the model, not a pull on the direct path); the energy
+        explained ‖P_Q x‖² = Re(bᴴ A), b = Qᴴx, is the likelihood of ε with every other parameter maximised.
+        Sums run over the paths' joint support only.
+        """
+        times = np.array(times, dtype=float)
+        n_p = len(times)
+        for it in range(steps + 1):
+            k = slice(self._support(float(np.min(times)), eps).start, self._support(float(np.max(times)), eps).stop)
+            t, xk = self.t[k], x[k]
+            if it == steps:
+                q = [self.replica.scaled(t, t_arrival_s=tp, eps=eps, carrier_hz=self.carrier_hz) for tp in times]
+            else:
+                q, dq = zip(*[self.replica.scaled_with_derivative(t, t_arrival_s=tp, eps=eps, carrier_hz=self.carrier_hz)
+                              for tp in times])
+            b = np.array([np.vdot(qp, xk) for qp in q])
+            try:
+                a = np.linalg.solve(np.array([[np.vdot(qi, qj) for qj in q] for qi in q]), b)
+            except np.linalg.LinAlgError:
+                return times, np.zeros(n_p, complex), 0.0
+            if it == steps:
+                break
+            resid = xk - sum(a[p] * q[p] for p in range(n_p))
+            m = np.stack([-(1 + eps) * a[p] * dq[p] for p in range(n_p)] + list(q) + [1j * qp for qp in q])
+            try:
+                step = np.linalg.solve(*_real_normal_equations(m, resid))[:n_p]
+            except np.linalg.LinAlgError:
+                break
+            times = times + min(1.0, 0.5 / self.fs / max(float(np.max(np.abs(step))), 1e-300)) * step
+        return times, a, float(np.real(np.vdot(a, b)))
+
+    def peaks(self, x, ta: float, eps: float, noise: float) -> np.ndarray:
+        """Arrivals of the replica's distinct correlation peaks at ε within (ta − EARLY_WINDOW_S, ta + ECHO_WINDOW_S).
+
+        The strongest always, others when significant (|c|²/(σ² E_q) ≥ ECHO_Z); at most 1 + MAX_ECHOES.
+        """
+        p = _replica_samples(self.replica, self.fs, self.carrier_hz, eps)
+        n = scipy.fft.next_fast_len(len(x) + len(p))
+        z = np.abs(scipy.fft.ifft(scipy.fft.fft(x, n) * np.conj(scipy.fft.fft(p, n)))[: len(x)]) ** 2
+        z /= noise * float(np.sum(np.abs(p) ** 2))
+        lags = self.t[0] + np.arange(len(x)) / self.fs
+        z = np.where((lags >= ta - EARLY_WINDOW_S) & (lags <= ta + ECHO_WINDOW_S), z, 0.0)
+        # distinct: local maxima a main lobe (1/B) apart at least
+        w = max(1, int(math.ceil(self.fs / self.replica.reference.bandwidth_hz)))
+        # and above the strongest path's own sidelobes (twice the replica's peak sidelobe: a scale off the
+        # truth raises them), which would otherwise pass for echoes at high SNR
+        floor = max(ECHO_Z, 2 * _peak_sidelobe(self.replica, self.fs, self.carrier_hz) * float(np.max(z)))
+        chosen: list[int] = []
+        for k in np.argsort(-z):
+            if len(chosen) == 1 + MAX_ECHOES or (chosen and z[k] < floor) or z[k] == 0.0:
+                break
+            if all(abs(int(k) - j) >= w for j in chosen) and z[k] >= np.max(z[max(0, k - 1) : k + 2]):
+                chosen.append(int(k))
+        return lags[chosen]
+
+    def scan_paths(self, x, ta0: float, eps0: float, noise: float, tol: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """ε of the joint multi-path likelihood over all of ±limit; every path's arrival and gain.
+
+        At SCAN_POINTS scales across ±limit the paths are found afresh as the replica's significant
+        correlation peaks near the ridge's prediction ta0 − g·(ε − ε0) (:meth:`peaks`) and refined jointly
+        (:meth:`paths_at`); around the best, a dichotomy slides each path along its own delay–Doppler ridge.
+        On a chirp the single-path profile is nearly flat along the ridge (the detection's bin, picked by the
+        noise, can be several bins from the truth), and an echo a few main lobes behind ripples it by its
+        sidelobe (≈ ±10 % for a surface echo 0.23 ms behind an LFM 19–29 kHz, enough to move its maximum by
+        metres per second): the joint model removes the ripple and leaves the ridge's own curvature.
+        """
+        best = (-math.inf, eps0, np.array([ta0]))
+        grid = np.linspace(-self.limit, self.limit, SCAN_POINTS)
+        for e in grid:
+            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)
+            times, _, energy = self.paths_at(x, times, e)
+            if energy > best[0]:
+                best = (energy, e, times)
+        _, e_ref, t_ref = best
+
+        def explained(e):
+            return self.paths_at(x, t_ref - self.g * (e - e_ref), e)[2]
+
+        step = grid[1] - grid[0]
+        e = dichotomy_max(explained, max(e_ref - step, -self.limit), min(e_ref + step, self.limit), tol=tol)
+        times, amps, _ = self.paths_at(x, t_ref - self.g * (e - e_ref), e)
+        return times, amps, e
+
     def echo_inflation(self, ta: float, eps: float, gain: complex, echoes: list) -> tuple[float, float]:
         """How much the fitted echoes widen the direct path's bounds: (σ_ε, σ_ridge) with them over without.
 
@@ -478,7 +604,7 @@ class _PathFitter:
             q, dq = self.replica.scaled_with_derivative(self.t, t_arrival_s=t_p, eps=e_p, carrier_hz=self.carrier_hz)
             cols += [-(1 + e_p) * a_p * dq, (self.t - t_p) * a_p * dq, q, 1j * q]
         d = np.stack(cols)
-        fisher = np.real(d @ np.conj(d).T)
+        fisher = _real_normal_equations(d, np.zeros(d.shape[1], complex))[0]
         try:
             cov = np.linalg.inv(fisher)
             alone = np.linalg.inv(fisher[:4, :4])
@@ -490,7 +616,7 @@ class _PathFitter:
         return k_e, k_ridge
 
     def find_echo(self, resid, ta: float, eps: float, noise: float) -> float | None:
-        """Arrival of the strongest later path in the residual, if significant (|c|²/(σ² E_q) ≥ ECHO_Z)."""
+        """Arrival of an earlier path (|c|²/(σ² E_q) ≥ EARLY_Z), else of the strongest later one (≥ ECHO_Z), in the residual."""
         fs = self.fs
         p = _replica_samples(self.replica, fs, self.carrier_hz, eps)
         n = scipy.fft.next_fast_len(len(resid) + len(p))
@@ -500,11 +626,17 @@ class _PathFitter:
         # closer to a stronger echo than the detector resolves)
         lobe = 1.5 / self.replica.reference.bandwidth_hz
         later = (lags > ta + lobe) & (lags < ta + ECHO_WINDOW_S + 0.5 * self.replica.duration_s)
-        ok = later | ((lags < ta - lobe) & (lags > ta - EARLY_WINDOW_S))
-        if not np.any(ok):
+        early = (lags < ta - lobe) & (lags > ta - EARLY_WINDOW_S)
+        z = np.abs(c) ** 2 / (noise * float(np.sum(np.abs(p) ** 2)))
+        # an earlier path first (it is the first arrival), at its own threshold: z is Exp(1) in noise and the
+        # early window holds ~EARLY_WINDOW_S·fs lags, so EARLY_Z keeps a false early path below ~1e-5 a ping
+        if np.any(early):
+            k = int(np.argmax(np.where(early, z, 0.0)))
+            if z[k] >= EARLY_Z:
+                return float(lags[k])
+        if not np.any(later):
             return None
-        z = np.where(ok, np.abs(c) ** 2, 0.0) / (noise * float(np.sum(np.abs(p) ** 2)))
-        k = int(np.argmax(z))
+        k = int(np.argmax(np.where(later, z, 0.0)))
         return float(lags[k]) if z[k] >= ECHO_Z else None
 
 
@@ -540,18 +672,40 @@ def fit_reference(
     bound = reference_crlb(replica) if bound is None else bound
     g = bound.ridge_slope_s
     dur = replica.duration_s
-    lo = max(0, int(math.floor((detection.t_start_s - EARLY_WINDOW_S - 2 / fs - t0_s) * fs)))
-    hi = min(len(r), int(math.ceil((detection.t_start_s + dur * 1.01 + ECHO_WINDOW_S + 2 / fs - t0_s) * fs)) + 1)
+    limit = 1.05 * eps_max
+    # a ridge longer than the main lobe over ±limit (a chirp): the detection may sit anywhere along it
+    ridge_s = abs(g) * 2 * limit
+    scan = ridge_s > 1.0 / replica.reference.bandwidth_hz
+    reach = ridge_s if scan else 0.0
+    lo = max(0, int(math.floor((detection.t_start_s - EARLY_WINDOW_S - reach - 2 / fs - t0_s) * fs)))
+    hi = min(len(r), int(math.ceil((detection.t_start_s + dur * 1.01 + ECHO_WINDOW_S + reach + 2 / fs - t0_s) * fs)) + 1)
     x = r[lo:hi]
     t = t0_s + np.arange(lo, hi) / fs
-    limit = 1.05 * eps_max
     path = _PathFitter(replica, t, carrier_hz, fs, g, limit)
-    ta, eps = path.fit(x, detection.t_start_s, detection.eps, search_eps, grid=True)
-    q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
-    gain = np.vdot(q, x) / float(np.real(np.vdot(q, q)))
-    noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
     echoes = []
-    if noise is not None:
+    noise = _noise_level(r, fs, t0_s, detection.t_start_s, dur / (1 + detection.eps)) if scan else None
+    if scan and noise is not None:
+        # a chirp's ε from the joint likelihood of its paths (see _PathFitter.scan_paths); paths too weak to
+        # matter are dropped, the first arrival is the earliest of FIRST_PATH_FRACTION of the strongest
+        times, amps, eps = path.scan_paths(x, detection.t_start_s, detection.eps, noise, search_eps / 16)
+        eq_s = float(np.sum(np.abs(_replica_samples(replica, fs, carrier_hz, eps)) ** 2))
+        keep = np.abs(amps) ** 2 * eq_s / noise >= EARLY_Z
+        keep[int(np.argmax(np.abs(amps)))] = True
+        order = np.argsort(times[keep])
+        times, amps = times[keep][order], amps[keep][order]
+        first = int(np.flatnonzero(np.abs(amps) >= FIRST_PATH_FRACTION * np.max(np.abs(amps)))[0])
+        paths = [[float(tp), eps, complex(ap), replica.scaled(t, t_arrival_s=float(tp), eps=eps, carrier_hz=carrier_hz)]
+                 for tp, ap in zip(times, amps)]
+        ta, eps, gain, q = paths.pop(first)
+        echoes = paths
+        if not echoes:  # the joint Gauss–Newton polish of what the dichotomy's tolerance left (with echoes: below)
+            ta, eps = path.fit(x, ta, eps, 0.0, grid=False)
+    else:
+        ta, eps = path.fit(x, detection.t_start_s, detection.eps, search_eps, grid=True)
+        q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+        gain = np.vdot(q, x) / float(np.real(np.vdot(q, q)))
+        noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
+    if noise is not None and not scan:
         # echoes overlapping the ping leak through the replica's sidelobes and pull the direct path along
         # its delay–Doppler ridge: find them in the residual, then fit every path on the others' residual (SAGE)
         resid = x - gain * q
@@ -569,7 +723,8 @@ def fit_reference(
                 ta, eps, gain, q = te, ee, ae, qe
             else:
                 echoes.append([te, ee, ae, qe])
-        for _ in range(3 if echoes else 0):
+    if echoes:
+        for _ in range(3):
             others = sum(e[2] * e[3] for e in echoes)
             ta_before = ta
             ta, eps = path.fit(x - others, ta, eps, 0.0, grid=False)
@@ -582,7 +737,7 @@ def fit_reference(
                 echoes[k] = [te, ee, np.vdot(qe, rest) / float(np.real(np.vdot(qe, qe))), qe]
             if abs(ta - ta_before) * fs < 0.01:  # the direct path no longer moves: the paths are separated
                 break
-        x = x - sum(e[2] * e[3] for e in echoes) if echoes else x
+        x = x - sum(e[2] * e[3] for e in echoes)
     q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
     eq = float(np.real(np.vdot(q, q)))
     gain = np.vdot(q, x) / eq
