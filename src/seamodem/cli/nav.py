@@ -141,6 +141,11 @@ def add_parser(sub) -> None:
     t.add_argument("--vr-floor", type=float, default=0.05, metavar="MPS",
                    help="floor of the records' v_r σ [m/s] (default 0.05: multipath Doppler spread, motion "
                         "during the frame; see docs)")
+    t.add_argument("--bearing-floor", type=float, default=0.5, metavar="DEG",
+                   help="floor of the records' bearing σ [deg] (default 0.5: array mounting and element position "
+                        "errors; see docs); bearings are used when the records carry azimuth_body_rad")
+    t.add_argument("--no-bearing", action="store_true",
+                   help="ignore the records' azimuth_body_rad (a hydrophone array's bearing)")
     t.add_argument("--r-from-records", action="store_true",
                    help="paper filters: R from each record's σ instead of eq 25 (the inertial filters do it by "
                         "default; accepted and ignored for them)")
@@ -264,6 +269,8 @@ def run_track(args: argparse.Namespace) -> int:
             v_r_floor_mps=args.vr_floor,
             sigma_range_m=args.sigma_range,
             sigma_v_r_mps=args.sigma_vr,
+            use_bearing=not args.no_bearing,
+            bearing_floor_rad=math.radians(args.bearing_floor) if math.isfinite(args.bearing_floor) else math.nan,
             truth=args.truth,
             command=command_line(),
             output=args.output,

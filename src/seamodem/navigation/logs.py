@@ -284,7 +284,9 @@ def read_measurements(path, *, what: str = "measurement file") -> dict[str, np.n
         CSV with the columns ``frame_index, t_emit_s, t_arrival_s, tof_s, range_m,
         v_r_mps, snr_db`` (SI units, SPEC §1); optional ``sigma_range_m`` [m] and
         ``sigma_v_r_mps`` [m/s] (also accepted as ``range_std_m``,
-        ``v_r_std_mps``), ``crc_ok`` (1, 0 or empty) and ``status`` (text). Other
+        ``v_r_std_mps``), ``crc_ok`` (1, 0 or empty), ``status`` (text) and, from a
+        hydrophone array (``seamodem rx --array``), ``azimuth_body_rad`` and
+        ``sigma_azimuth_body_rad`` (empty where a frame has none). Other
         columns (``payload_text``...) are ignored. Metadata comment lines before
         the header are optional (:func:`read_metadata`).
 
@@ -314,7 +316,8 @@ def read_measurements(path, *, what: str = "measurement file") -> dict[str, np.n
     # An alias is renamed unless the file also has the canonical column (which then wins).
     header = [SIGMA_ALIASES[h] if h in SIGMA_ALIASES and SIGMA_ALIASES[h] not in header else h for h in header]
     _check_columns(header, MEASUREMENT_COLUMNS, path, what)
-    numeric = [*MEASUREMENT_COLUMNS, *(c for c in ("sigma_range_m", "sigma_v_r_mps", "crc_ok") if c in header)]
+    numeric = [*MEASUREMENT_COLUMNS, *(c for c in ("sigma_range_m", "sigma_v_r_mps", "crc_ok", "azimuth_body_rad",
+                                                   "sigma_azimuth_body_rad") if c in header)]
     data = {c: _float_column(rows, header.index(c), c, path, what) for c in numeric}
     if "status" in header:
         i = header.index("status")

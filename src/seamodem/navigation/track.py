@@ -70,7 +70,7 @@ from .paper import EQ25_R, eq25_q, eq25_r_text
 from .smoother import rts_smooth
 
 __all__ = ["MEASUREMENT_COLUMNS", "IMU_COLUMNS", "FILTERS", "SMOOTHERS", "RANGE_FLOOR_M", "V_R_FLOOR_MPS",
-           "DEFAULT_SIGMA_RANGE_M", "DEFAULT_SIGMA_V_R_MPS", "FRAME_STATUS", "read_columns", "run_track",
+           "DEFAULT_SIGMA_RANGE_M", "DEFAULT_SIGMA_V_R_MPS", "BEARING_FLOOR_RAD", "FRAME_STATUS", "read_columns", "run_track",
            "track_from_files"]
 
 MEASUREMENT_COLUMNS = ("frame_index", "t_emit_s", "t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db")
@@ -84,6 +84,12 @@ V_R_FLOOR_MPS = 0.05
 #: σ of records that carry none (module notes).
 DEFAULT_SIGMA_RANGE_M = 0.05
 DEFAULT_SIGMA_V_R_MPS = 0.05
+#: Floor of a record's bearing σ: the receiver's σ is the CRLB at the frame's SNR (0.1–0.2° at 12 dB on an
+#: 8 cm array), but the bearing also carries the array's mounting alignment to the heading sensor and the
+#: elements' position errors (±2 mm: 1.2° RMS uncalibrated, docs/array.md); 0.5° for a calibrated array.
+BEARING_FLOOR_RAD = math.radians(0.5)
+#: Bearing σ for records that carry an azimuth without its σ.
+DEFAULT_SIGMA_BEARING_RAD = math.radians(2.0)
 #: Frame status in the frame table: the filter's codes, and frames outside the IMU's time span.
 FRAME_STATUS = {0: "not_used", 1: "accepted", 2: "gated", 3: "accepted_after_gates", -1: "outside_imu"}
 #: χ² with 2 degrees of freedom at 95 %: the error ellipse that should hold the truth 95 % of the time.
@@ -126,7 +132,8 @@ def _check_positive(name, value):
 def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0, filter="inertial",
               r_from_records=False, depths=None, depth_log=None, beacon_depth_m=0.0, smooth=None, lag_s=None,
               config=None, range_floor_m=RANGE_FLOOR_M, v_r_floor_mps=V_R_FLOOR_MPS, sigma_range_m=None,
-              sigma_v_r_mps=None, start_sigma_m=1.0, fixes=None) -> dict:
+              sigma_v_r_mps=None, start_sigma_m=1.0, fixes=None, use_bearing=True,
+              bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
     """Track from IMU samples and acoustic records, each fused at its own time.
 
     Parameters
@@ -168,6 +175,9 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
         1-σ error of the start position per axis [m] (a GNSS fix: 1 m by default).
     fixes : dict, optional
         Later position fixes ``t_s``, ``x_m``, ``y_m``, ``sigma_m`` (GNSS at the surface; inertial filters).
+    use_bearing : bool
+        Inertial filters: use the records' ``azimuth_body_rad`` (a hydrophone array) when they have it, with
+        σ = max(``sigma_azimuth_body_rad`` (or :data:`DEFAULT_SIGMA_BEARING_RAD`), ``bearing_floor_rad``).
 
     Returns
     -------
@@ -221,7 +231,8 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
                            start_speed_mps=start_speed_mps, use_vr=filter == "inertial", smooth=smooth, lag_s=lag_s,
                            config=config, range_floor_m=range_floor_m, v_r_floor_mps=v_r_floor_mps,
                            sigma_range_m=sigma_range_m, sigma_v_r_mps=sigma_v_r_mps, start_sigma_m=start_sigma_m,
-                           fixes=fixes, filter=filter, depths=depths)
+                           fixes=fixes, filter=filter, depths=depths, use_bearing=use_bearing,
+                           bearing_floor_rad=bearing_floor_rad)
 
 
 def _record_sigma(meas, column, given, default, floor, name) -> tuple[np.ndarray, str]:
@@ -243,8 +254,8 @@ def _record_sigma(meas, column, given, default, floor, name) -> tuple[np.ndarray
 
 def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, use_vr, smooth, lag_s, config,
                     range_floor_m, v_r_floor_mps, sigma_range_m, sigma_v_r_mps, start_sigma_m, fixes, filter,
-                    depths) -> dict:
-    from .inertial import InertialConfig, add_fixes, build_nodes, run_filter, state_names
+                    depths, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
+    from .inertial import InertialConfig, add_bearings, add_fixes, build_nodes, run_filter, state_names
     from .smoothing import batch_smooth, fixed_lag_smooth
 
     for name, value in (("range_floor_m", range_floor_m), ("v_r_floor_mps", v_r_floor_mps)):
@@ -284,6 +295,15 @@ def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, 
             _warn(f"fixes: {ft.size - n_fix_used} of {ft.size} fix(es) are more than half an IMU step from every "
                   f"IMU sample or frame (outside the track's time span?) and are not used")
         fixes_xy = np.c_[np.asarray(fixes["x_m"], dtype=float), np.asarray(fixes["y_m"], dtype=float)]
+    n_bearings = 0
+    if not (bearing_floor_rad is not None and math.isfinite(bearing_floor_rad) and bearing_floor_rad >= 0):
+        raise ConfigError("bearing_floor_rad", f"must be a finite number >= 0, got {bearing_floor_rad!r}")
+    if use_bearing and "azimuth_body_rad" in meas and np.isfinite(meas["azimuth_body_rad"]).any():
+        az = np.asarray(meas["azimuth_body_rad"], dtype=float)
+        sb = np.asarray(meas.get("sigma_azimuth_body_rad", np.full(az.size, np.nan)), dtype=float)
+        sb = np.maximum(np.where(np.isfinite(sb) & (sb > 0), sb, DEFAULT_SIGMA_BEARING_RAD), bearing_floor_rad)
+        nodes = add_bearings(nodes, az[inside], sb[inside])
+        n_bearings = int(nodes.has_bearing.sum())
     z0, P0 = cfg.initial(float(start_xy[0]), float(start_xy[1]), float(heading[0]), float(start_speed_mps))
     run = run_filter(nodes, cfg, beacon_xy=beacon_xy, z0=z0, P0=P0, use_vr=use_vr)
     states, covs = run.states, run.covariances
@@ -310,6 +330,11 @@ def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, 
     frames = {"frame_index": np.asarray(meas["frame_index"]), "t_arrival_s": t_frame,
               "status": np.array([FRAME_STATUS[int(s)] for s in status], dtype=object), "nis": nis,
               "sigma_range_m": sr, "sigma_v_r_mps": sv if use_vr else np.full(n, np.nan)}
+    if n_bearings:
+        b_status = np.full(n, -1, dtype=int)
+        b_status[rec] = run.bearing_status[where]
+        names = {**FRAME_STATUS, 0: "none"}
+        frames["bearing_status"] = np.array([names[int(s)] for s in b_status], dtype=object)
     settings = {
         "filter": filter,
         "description": ("inertial beacon filter (navigation.inertial): IMU-driven, heading bias state, "
@@ -325,6 +350,7 @@ def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, 
                   "speed_mps": float(start_speed_mps), "heading_rad": float(heading[0]),
                   "heading_from": "first IMU heading reading"},
         "fixes_used": n_fix_used, "depths_m": list(depths) if depths else None,
+        "bearings_used": n_bearings, "bearing_floor_deg": math.degrees(bearing_floor_rad),
     }
     return {"t_s": nodes.t_s.copy(), "state": states, "cov": covs, "names": state_names(cfg), "frames": frames,
             "settings": settings, "run": run, "fixes_xy": fixes_xy}
@@ -431,7 +457,7 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
                      depth_log=None, beacon_depth_m=0.0, filter="inertial", r_from_records=False, smooth=None,
                      lag_s=None, config=None, range_floor_m=RANGE_FLOOR_M, v_r_floor_mps=V_R_FLOOR_MPS,
                      sigma_range_m=None, sigma_v_r_mps=None, start_sigma_m=1.0, fixes=None, truth=None,
-                     command=None, output) -> str:
+                     command=None, output, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> str:
     """Read, track, write OUT.csv, OUT_frames.csv, OUT.png and OUT.json; return a one-paragraph summary.
 
     The readers are :func:`~.logs.read_measurements`, :func:`~.logs.read_imu`, :func:`~.logs.read_fixes`
@@ -471,7 +497,8 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
                        filter=filter, r_from_records=r_from_records, depths=depths, depth_log=depth_cols,
                        beacon_depth_m=beacon_depth_m, smooth=smooth, lag_s=lag_s, config=config,
                        range_floor_m=range_floor_m, v_r_floor_mps=v_r_floor_mps, sigma_range_m=sigma_range_m,
-                       sigma_v_r_mps=sigma_v_r_mps, start_sigma_m=start_sigma_m, fixes=fix_cols)
+                       sigma_v_r_mps=sigma_v_r_mps, start_sigma_m=start_sigma_m, fixes=fix_cols,
+                       use_bearing=use_bearing, bearing_floor_rad=bearing_floor_rad)
     t, state, cov, names = result["t_s"], result["state"], result["cov"], result["names"]
     columns = {"t_s": t, "x_m": state[:, 0], "y_m": state[:, 1], "heading_rad": state[:, 2],
                "speed_mps": state[:, 3]}
@@ -512,11 +539,14 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
             writer.writerows(zip(*(np.round(v, 9) for v in columns.values())))
         with open(temps[1], "w", newline="") as f:
             writer = csv.writer(f)
-            writer.writerow(["frame_index", "t_arrival_s", "status", "nis", "sigma_range_m", "sigma_v_r_mps"])
-            for row in zip(frames["frame_index"], frames["t_arrival_s"], frames["status"], frames["nis"],
-                           frames["sigma_range_m"], frames["sigma_v_r_mps"]):
+            bearing = frames.get("bearing_status")
+            writer.writerow(["frame_index", "t_arrival_s", "status", "nis", "sigma_range_m", "sigma_v_r_mps"]
+                            + (["bearing_status"] if bearing is not None else []))
+            for i, row in enumerate(zip(frames["frame_index"], frames["t_arrival_s"], frames["status"], frames["nis"],
+                                        frames["sigma_range_m"], frames["sigma_v_r_mps"])):
                 writer.writerow([int(row[0]), f"{row[1]:.9g}", row[2]] + ["" if not np.isfinite(v) else f"{v:.6g}"
-                                                                          for v in row[3:]])
+                                                                          for v in row[3:]]
+                                + ([bearing[i]] if bearing is not None else []))
         plot_track(t, state[:, :2], temps[2], beacon_xy=beacon_xy, cov_xy=cov[:, :2, :2], truth_xy=truth_xy,
                    fixes_xy=result.get("fixes_xy"),
                    title=f"{filter}{smoother_label}: {frames['status'].size} frames ({counts['gated']} gated), "
@@ -524,6 +554,10 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
         Path(temps[3]).write_text(json.dumps(sidecar, indent=1, default=_jsonable) + "\n", encoding="utf-8")
     text = (f"wrote {out} ({t.size} states), {fpath}, {out.with_suffix('.png')}, {out.with_suffix('.json')}; "
             f"frames: {counts['accepted'] + counts['accepted_after_gates']} used, {counts['gated']} gated")
+    if "bearing_status" in frames:
+        b = frames["bearing_status"]
+        text += (f"; array bearings: {int(np.isin(b, ('accepted', 'accepted_after_gates')).sum())} used, "
+                 f"{int((b == 'gated').sum())} gated")
     if counts["accepted_after_gates"]:
         text += f", {counts['accepted_after_gates']} accepted after a run of gated ones"
     if counts["outside_imu"]:
