@@ -66,6 +66,30 @@ def test_each_paths_doppler_within_its_bound():
     assert 2e-4 < np.mean(crlbs[:, 0]) < 8e-4
 
 
+def test_each_paths_delay_from_a_perturbed_start_within_its_sigma():
+    # the pilot fit's delays are off by a few µs: the data-aided timing over the whole frame
+    # brings each path back within its σ, and the direct path's σ is below the pilot's bound
+    from seamodem.receive.bounds import delay_crlb_s
+
+    rng = np.random.default_rng(9)
+    errors, sigmas = [], []
+    for seed in range(4):
+        x, ta = _received(seed, 12.0)
+        truth = np.array([ta + d for d, _, _ in PATHS])
+        plan = plan_front_end(CFG, FS, v_max_mps=5, sound_speed_mps=C)
+        fe = FrontEnd(plan)
+        bb = np.concatenate([fe.push(x)[0], fe.flush()[0]])
+        fit = fit_whole_frame(
+            bb, plan.fs_data, 0.0, config=CFG, symbols=FRAME.symbols, reference=np.ones(len(FRAME.symbols), bool),
+            delays_s=truth + rng.normal(0, 5e-6, len(truth)), v_mps=V + 0.05, sound_speed_mps=C,
+        )
+        errors.append(fit.delays_s - truth)
+        sigmas.append(fit.sigma_delay_s)
+    errors, sigmas = np.array(errors), np.array(sigmas)
+    assert np.all(np.abs(errors) <= 3.5 * sigmas)
+    assert np.all(sigmas[:, 0] < float(delay_crlb_s(CFG, 12.0)))
+
+
 def test_known_signal_bound_is_the_tone_bound_with_the_data_band():
     # SPEC §6: C/N0 = R·Es/N0; 1856 symbols (0.29 s) at Es/N0 = 10 dB → c/f0·√(3/(2π²·64000·0.29³))
     sigma = known_signal_velocity_crlb_mps(CFG, 10.0, 1856, sound_speed_mps=C)

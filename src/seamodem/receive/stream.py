@@ -95,20 +95,23 @@ class Receiver:
         t_arr = m.pilot.t_start_s
         if s.turnaround_s is None:
             k, t_emit = self.emissions.frame_for(t_arr - s.clock_offset_s)
-            tof = t_arr - t_emit - s.clock_offset_s
         else:
             k, t_emit = self.emissions.frame_for(t_arr - s.turnaround_s)
-            tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
         # impulses that blanking left are noise the median-based SNR does not see
         excess = impulse_excess(bb, self.plan, t0_s, t_start_s=t_arr, duration_s=self.config.frame_duration_s)
         sigma_tau = float(delay_crlb_s(self.config, m.pilot.snr_db)) * math.sqrt(excess)
-        if s.turnaround_s is not None:
-            sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
         sent = None
         if self.payloads is not None and 0 <= k < len(self.payloads):
             sent = self.payloads[k]
         dec = demodulate(m, bb, t0_s, fs, config=self.config, pilot=self.pilot, settings=s, sent_payload=sent)
-        doppler = self._doppler(m, dec, bb, t0_s, fs, excess)
+        doppler, timing = self._doppler(m, dec, bb, t0_s, fs, excess)
+        if timing is not None:  # the direct path's data-aided arrival over the whole frame
+            t_arr, sigma_tau = timing
+        if s.turnaround_s is None:
+            tof = t_arr - t_emit - s.clock_offset_s
+        else:
+            tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
+            sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
         return MeasurementRecord(
             frame_index=int(k),
             t_emit_s=float(t_emit),
@@ -137,8 +140,9 @@ class Receiver:
         return self._blanker.blanked_fraction(int(start * fs), int((start + self.config.frame_duration_s) * fs))
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
-                 excess: float) -> dict:
-        """v_r_mps, its σ and source: the direct path's whole-frame Doppler when decoded, else the tone ML.
+                 excess: float) -> tuple[dict, tuple[float, float] | None]:
+        """v_r_mps, its σ and source: the direct path's whole-frame Doppler when decoded, else the tone ML;
+        and (arrival [s], its σ [s]) of the direct path from the whole-frame fit, or None.
 
         The tone sums every path; it is flagged as multipath-biased when it and
         the direct path's own estimate (whole-frame fit, else the pilot bank)
@@ -157,15 +161,16 @@ class Receiver:
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
-                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps))
+                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps)), \
+                (float(wf.delays_s[first]), float(wf.sigma_delay_s[first]))
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, v_r_source="bank",
-                        v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s))
+                        v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None
         gap = abs(v_tone - m.pilot.v_mps)
         excess = max(0.0, gap**2 - 9 * sigma_bank**2)
         return dict(v_r_mps=v_tone, sigma_v_r_mps=math.sqrt(sigma_tone**2 + excess), v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
-                    n_paths=len(m.paths.delays_s))
+                    n_paths=len(m.paths.delays_s)), None
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
         """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""

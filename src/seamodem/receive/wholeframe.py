@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import FrameConfig
+from .bounds import gabor_bandwidth_hz
 
 __all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
 
@@ -67,6 +68,9 @@ class WholeFrameFit:
         CRLB of a known signal at the path's Es/N0 over the symbols used [m/s].
     es_n0 : numpy.ndarray
         Each path's Es/N0 (linear), noise from the residual of all paths.
+    sigma_delay_s : numpy.ndarray
+        Standard deviation of ``delays_s`` [s]: the segments' deviation of the
+        data-aided timing, at least its CRLB over the reference symbols.
     n_reference : int
         Symbols used as the reference (known or confident).
     """
@@ -78,6 +82,7 @@ class WholeFrameFit:
     sigma_v_mps: np.ndarray
     crlb_v_mps: np.ndarray
     es_n0: np.ndarray
+    sigma_delay_s: np.ndarray
     n_reference: int
 
 
@@ -186,15 +191,24 @@ class _Segment:
         i0, w = _lagrange((instants_s - self.t0_s) * self.fs * _UPSAMPLE)
         return (i0[:, None] + _TAPS[None, :]) % self.big, w
 
-    def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float):
-        """Matched-filter outputs at ``instants_s`` of r with ``offset_hz`` (phase 0 at ``t_ref_s``) removed."""
+    def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float,
+               derivative: bool = False):
+        """Matched-filter outputs at ``instants_s`` of r with ``offset_hz`` (phase 0 at ``t_ref_s``) removed;
+        with ``derivative``, also their time derivative dy/dt [1/s] (the filter's spectrum times j2πf)."""
         period, h = self._pulse(scale)
         x = r * np.exp(-2j * np.pi * offset_hz * (self.t_s - t_ref_s)) if offset_hz else r
-        up = np.zeros(self.big, complex)
-        up[self.band_big] = self._fft.fft(x, self.m)[self.band] * h
-        c = self._fft.ifft(up) * _UPSAMPLE
+        spec = self._fft.fft(x, self.m)[self.band] * h
         idx, w = self._grid(instants_s)
-        return np.einsum("kj,kj->k", c[idx], w) / math.sqrt(period)
+
+        def read(band_values):
+            up = np.zeros(self.big, complex)
+            up[self.band_big] = band_values
+            c = self._fft.ifft(up) * _UPSAMPLE
+            return np.einsum("kj,kj->k", c[idx], w) / math.sqrt(period)
+
+        if not derivative:
+            return read(spec)
+        return read(spec), read(spec * (2j * np.pi * self.band_hz))
 
     def synthesize(self, symbols: np.ndarray, instants_s: np.ndarray, *, scale: float) -> np.ndarray:
         """Σ x_k √T' h(t_n − t_k) on the segment's grid, without the carrier phase."""
@@ -274,11 +288,27 @@ def fit_whole_frame(
         return amps[p] * shape * np.exp(1j * _phase(config, seg.t_s - delays[p], eps[p], beta[p]))
 
     def outputs(p, r):
-        """Symbols stripped matched-filter outputs z_k of path p, drift phase removed."""
+        """Symbols stripped matched-filter outputs z_k of path p and their time derivatives, drift phase removed."""
         inst = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
-        y = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p])
-        extra = _phase(config, inst - delays[p], 0.0, beta[p])
-        return y * np.exp(-1j * extra) * np.conj(x[ref_idx]), inst
+        y, dy = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p], derivative=True)
+        strip = np.exp(-1j * _phase(config, inst - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
+        return y * strip, dy * strip, inst
+
+    def timing_fit(z, dz, p):
+        """Data-aided timing error of path p's instants [s] and its σ from the segments' scatter.
+
+        Near the right instants y_k ≈ A x_k R(δ) with R the pulse's autocorrelation
+        (R(0) = 1, R''(0) = −(2πβ)², β the Gabor bandwidth), so Σ dz ≈ n A R''(0) δ
+        and Σ z ≈ n A per segment: δ_seg = Re(Σdz·conj(Σz)) / (|Σz|² R''(0)).
+        """
+        r2 = -(2 * np.pi * gabor_bandwidth_hz(config.symbol_rate_hz * (1 + eps[p]), config.rolloff)) ** 2
+        zs = np.bincount(seg_of, z.real, n_segments) + 1j * np.bincount(seg_of, z.imag, n_segments)
+        dzs = np.bincount(seg_of, dz.real, n_segments) + 1j * np.bincount(seg_of, dz.imag, n_segments)
+        power = np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny)
+        d_seg = np.real(dzs * np.conj(zs)) / (power * r2)
+        w = power / counts
+        d = float(np.sum(w * d_seg) / np.sum(w))
+        return d, math.sqrt(float(np.sum(w * (d_seg - d) ** 2)) / ((n_segments - 1) * float(np.sum(w))))
 
     def phase_fit(z, inst, p):
         """Weighted LS line + parabola through the segments' phases: (coefficients, σ of the slope)."""
@@ -295,6 +325,8 @@ def fit_whole_frame(
         return coef, math.sqrt(max(cov[1, 1], 0.0))
 
     sigma_b = np.full(n_paths, math.inf)
+    sigma_d = np.full(n_paths, math.inf)
+    quarter = config.symbol_period_s / 4
     # SAGE: each sweep filters every path once, the others' fitted contributions removed. The
     # Doppler found moves the symbol instants, so a path, a lone one too, is filtered again in
     # the next sweep; the fit stops after a sweep that moved no path's Doppler by a tenth of its
@@ -302,11 +334,13 @@ def fit_whole_frame(
     for sweep in range(sweeps):
         moved = False
         for p in range(n_paths):
-            z, inst = outputs(p, seg_bb - (total - models[p]) if n_paths > 1 else seg_bb)
+            z, dz, inst = outputs(p, seg_bb - (total - models[p]) if n_paths > 1 else seg_bb)
             coef, sigma_b[p] = phase_fit(z, inst, p)
+            delta, sigma_d[p] = timing_fit(z, dz, p)
             eps[p] += coef[1] / (2 * np.pi * f0)
             beta[p] += coef[2] / (np.pi * f0)
-            moved |= bool(abs(coef[1]) > 0.1 * sigma_b[p])
+            delays[p] -= float(np.clip(delta, -quarter, quarter))
+            moved |= bool(abs(coef[1]) > 0.1 * sigma_b[p] or abs(delta) > 0.1 * sigma_d[p])
             # the amplitude from the outputs, less the phase the update added to the model
             # (c1·(t − τ_p) + c2·((t − t_c)² − (D/2)²)); the update moves the instants by a hair
             tk = inst - (delays[p] + half)
@@ -327,13 +361,18 @@ def fit_whole_frame(
     es_n0 = np.abs(amps) ** 2 / noise_var
     crlb = known_signal_velocity_crlb_mps(config, es_n0, n_ref, sound_speed_mps=c)
     sigma_ls = c * sigma_b / (2 * np.pi * f0)
+    # delay CRLB of a known signal of n symbols: 1/(2πβ√(2 n Es/N0)) (SPEC §6, with the whole frame's energy)
+    crlb_d = 1.0 / (2 * np.pi * gabor_bandwidth_hz(config.symbol_rate_hz, config.rolloff)
+                    * np.sqrt(2 * n_ref * np.maximum(es_n0, 1e-30)))
+    order = np.argsort(delays)
     return WholeFrameFit(
-        delays_s=delays,
-        amplitudes=amps.copy(),
-        v_mps=eps * c,
-        accel_mps2=beta * c,
-        sigma_v_mps=np.maximum(sigma_ls, crlb),
-        crlb_v_mps=crlb,
-        es_n0=es_n0,
+        delays_s=delays[order],
+        amplitudes=amps[order],
+        v_mps=(eps * c)[order],
+        accel_mps2=(beta * c)[order],
+        sigma_v_mps=np.maximum(sigma_ls, crlb)[order],
+        crlb_v_mps=crlb[order],
+        es_n0=es_n0[order],
+        sigma_delay_s=np.maximum(sigma_d, crlb_d)[order],
         n_reference=int(n_ref),
     )
