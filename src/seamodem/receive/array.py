@@ -1,8 +1,11 @@
 """Multichannel reception: direction of arrival per frame and maximal-ratio combining (issue 17).
 
-For each frame the single-hydrophone receiver detects (on a reference
-channel), every channel k is correlated with the frame's pilot as an
-*analytic passband* waveform, Doppler-scaled by the measured speed:
+:func:`receive_array` takes every channel through the receiver's front end,
+detects on all channels at once (:class:`ArrayDetector`) and, per frame,
+correlates every channel with the frame's pilot as an *analytic passband*
+waveform, Doppler-scaled by the detection's speed (on the decimated basebands,
+:func:`baseband_correlation`; :func:`array_correlation` is the same on
+passband samples):
 
     c_k(δ) = Σ_n x_k(t_n) r*(t_n − δ),   r(t) = b((t − t_a)(1 + v/c)) e^{j2π f0 (t − t_a)(1 + v/c)},
 
@@ -23,10 +26,15 @@ unit direction u (body frame, towards the source) reaches element p_k at
    envelope's share, β²/f0² ≈ 0.5 %, is counted in the bound), inflated by
    the fit's misfit when its χ² exceeds its degrees of freedom.
 
-Combining: each channel is advanced by its direct-path lag and weighted by
-conj(c_k)/σ²_{c,k} (maximal-ratio combining), scaled so that the combined
-noise level equals the reference channel's; the single-hydrophone receiver
-then measures and decodes the combined frame.
+Combining: each channel's baseband is advanced by its direct-path lag and
+weighted by conj(c_k)/σ²_{c,k} (maximal-ratio combining), scaled so that the
+combined noise level equals the reference channel's; the single-hydrophone
+receiver's measurement and decoding then run once on the combined frame.
+
+Flat and linear arrays (:func:`array_geometry`): the mirror image through a
+flat array's plane, or the cone about a line, fits as well as the truth; an
+assumption (beacon below the plane; beacon to port at elevation 0) picks one,
+and the estimate states it (``DoaEstimate.ambiguity``).
 
 Array geometry and angles: :mod:`seamodem.channel.array` (body frame x
 forward, y port, z up; azimuth atan2(u_y, u_x), elevation asin(u_z)). The
@@ -469,47 +477,53 @@ def estimate_doa(
     A = np.column_stack([np.ones(len(p)), -p])
     sol = np.linalg.lstsq(A, coarse, rcond=None)[0]
     w = sol[1:]
-    az0, el0 = _start_direction(geom, c * w)
-    theta = np.array([float(np.mean(coarse + p @ unit_vector(az0, el0) / c)), az0, el0])
-    free = [0, 1] if geom.kind == "linear" else [0, 1, 2]
-    theta = _fit_plane_wave(corr, p, theta, c, f0, position_sigma_m / c, free)
+    model = _PlaneWave(geom, c)
+    theta = model.start(coarse, c * w)
+    theta = _fit_plane_wave(corr, model, theta, f0, position_sigma_m / c)
     # step 2b: echoes resolved from the direct path (> 3/4 symbol later) are fitted per channel and removed,
     # so that their pilot sidelobes do not pull the direct path's phases; then the fit again
-    lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
+    lags = model.lags(theta)
     echo_lags, echo_amps = _echoes(corr, lags, corr.at(lags) / corr.energy, fs=fs_of(corr),
                                    after_s=0.75 / config.symbol_rate_hz)
     if echo_lags.size:
         corr = corr.without(echo_lags, echo_amps)
-        theta = _fit_plane_wave(corr, p, theta, c, f0, position_sigma_m / c, free)
-    theta[1], theta[2] = _resolve_side(geom, theta[1], theta[2])
-    lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
+        theta = _fit_plane_wave(corr, model, theta, f0, position_sigma_m / c)
+    lags = model.lags(theta)
     amp = corr.at(lags)
     ref = np.sum(amp * np.abs(amp))
     resid = -np.angle(amp * np.conj(ref)) / (2 * np.pi * f0)
     snr = _snr(amp, corr.noise_var)
     beta = gabor_bandwidth_hz(config.symbol_rate_hz, config.rolloff)
     fisher_w = 1.0 / (1.0 / (2.0 * snr * (2 * np.pi) ** 2 * (f0**2 + beta**2)) + (position_sigma_m / c) ** 2)
-    J = _jacobian(p, theta[1], theta[2], c)[:, free]
+    J = model.jacobian(theta)
     try:
-        cov_free = np.linalg.inv(J.T @ (fisher_w[:, None] * J))
-    except np.linalg.LinAlgError:  # a direction the array cannot see (e.g. in a flat array's plane)
-        cov_free = np.full((len(free), len(free)), np.inf)
-    cov = np.full((3, 3), np.nan)
-    cov[np.ix_(free, free)] = cov_free
-    dof = len(p) - len(free)
+        cov_theta = np.linalg.inv(J.T @ (fisher_w[:, None] * J))
+    except np.linalg.LinAlgError:  # a direction the array cannot see
+        cov_theta = np.full((len(theta), len(theta)), np.inf)
+    dof = len(p) - len(theta)
     r = resid - np.sum(fisher_w * resid) / np.sum(fisher_w)  # the common phase is t0's
     chi2 = float(np.sum(fisher_w * r**2))
     if dof > 0 and chi2 > dof:
-        cov = cov * (chi2 / dof)
-    az = float(math.remainder(theta[1], 2 * math.pi))
+        cov_theta = cov_theta * (chi2 / dof)
+    t0, az, el, G = model.angles(theta)
+    cov = G @ cov_theta @ G.T  # of (t0, azimuth, elevation), first order
+    if geom.kind == "planar":
+        # near the plane the elevation follows |s| = cos e ≈ 1 − e²/2, not linearly: with |s| within 3σ of 1,
+        # e is only known to within √(2σ_|s|) (and is 0 when noise puts |s| beyond 1)
+        span = theta[1:]
+        norm = float(np.linalg.norm(span))
+        sigma_norm = math.sqrt(max(float(span @ cov_theta[1:, 1:] @ span) / max(norm, 1e-300) ** 2, 0.0))
+        if 1.0 - norm < 3.0 * sigma_norm:
+            cov[2, 2] = max(cov[2, 2], 2.0 * sigma_norm)
+    az0, el0 = model.angles(model.start(coarse, c * w))[1:3]
     linear = geom.kind == "linear"
     return DoaEstimate(
-        azimuth_rad=az,
-        elevation_rad=math.nan if linear else float(theta[2]),
+        azimuth_rad=float(math.remainder(az, 2 * math.pi)),
+        elevation_rad=math.nan if linear else float(el),
         sigma_azimuth_rad=float(math.sqrt(cov[1, 1])),
         sigma_elevation_rad=math.nan if linear else float(math.sqrt(cov[2, 2])),
         covariance=cov,
-        t0_s=float(theta[0]),
+        t0_s=float(t0),
         lags_s=lags,
         amplitudes=amp,
         snr=snr,
@@ -521,41 +535,93 @@ def estimate_doa(
     )
 
 
-def _start_direction(geom: ArrayGeometry, u_fit: np.ndarray) -> tuple[float, float]:
-    """Azimuth and elevation to start the fit from, from the coarse plane wave's c·w (its part in the array's span)."""
-    if geom.kind == "volume":
-        w = u_fit
-        return math.atan2(w[1], w[0]), math.asin(float(np.clip(w[2] / max(np.linalg.norm(w), 1e-300), -1, 1)))
-    if geom.kind == "planar":
-        n = geom.axis
-        inplane = u_fit - (u_fit @ n) * n
-        norm = float(np.linalg.norm(inplane))
-        if norm > 0.99:
-            inplane, norm = inplane * 0.99 / norm, 0.99
-        side = -1.0 if geom.assume == "below" else 1.0
-        u = inplane + side * math.sqrt(1.0 - norm**2) * n
-        return math.atan2(u[1], u[0]), math.asin(float(np.clip(u[2], -1, 1)))
-    d = geom.axis
-    cos_psi = float(np.clip(u_fit @ d, -0.999, 0.999))
-    alpha = math.atan2(d[1], d[0])
-    psi = math.acos(cos_psi)
-    return alpha + (psi if geom.assume == "port" else -psi), 0.0
+class _PlaneWave:
+    """The plane-wave delay model δ_k = t0 − p_k·u/c in the parameters an array's geometry can measure.
 
+    * volume: θ = (t0, azimuth, elevation);
+    * planar: θ = (t0, s_1, s_2), u's components on an orthonormal basis of
+      the plane (δ is linear in them: the fit cannot wander along the badly
+      measured normal); u = Σ s_i e_i ± √(1 − |s|²) n, the sign the assumption's;
+    * linear: θ = (t0, s), s = u·d = cos ψ on the line d; u at elevation 0 on
+      the assumed side: cos ψ d ± sin ψ (ẑ × d).
+    """
 
-def _resolve_side(geom: ArrayGeometry, az: float, el: float) -> tuple[float, float]:
-    """The fitted direction, or its mirror image when it lies on the side the assumption excludes."""
-    u = unit_vector(az, el)
-    if geom.kind == "planar":
-        side = -1.0 if geom.assume == "below" else 1.0
-        if side * float(u @ geom.axis) < 0:
-            u = u - 2.0 * float(u @ geom.axis) * geom.axis
-            return math.atan2(u[1], u[0]), math.asin(float(np.clip(u[2], -1, 1)))
-    elif geom.kind == "linear":
-        d = geom.axis
-        port = d[0] * u[1] - d[1] * u[0] > 0
-        if port != (geom.assume == "port"):
-            return 2.0 * math.atan2(d[1], d[0]) - az, el
-    return az, el
+    def __init__(self, geom: ArrayGeometry, c: float):
+        self.geom, self.c = geom, c
+        p = geom.positions_m
+        if geom.kind == "planar":
+            n = geom.axis
+            e1 = np.cross(n, [1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.cross(n, [0.0, 1.0, 0.0])
+            e1 /= np.linalg.norm(e1)
+            self.basis = np.stack([e1, np.cross(n, e1)])
+        elif geom.kind == "linear":
+            self.basis = geom.axis[None, :]
+        else:
+            self.basis = None
+        self.q = None if self.basis is None else p @ self.basis.T  # element coordinates in the span
+
+    def start(self, coarse: np.ndarray, u_fit: np.ndarray) -> np.ndarray:
+        """θ from the coarse lags and the least-squares c·w."""
+        p, c = self.geom.positions_m, self.c
+        if self.basis is None:
+            az, el = math.atan2(u_fit[1], u_fit[0]), math.asin(float(np.clip(u_fit[2] / max(np.linalg.norm(u_fit), 1e-300), -1, 1)))
+            return np.array([float(np.mean(coarse + p @ unit_vector(az, el) / c)), az, el])
+        s = self.basis @ u_fit
+        norm = float(np.linalg.norm(s))
+        if norm > 1.0:
+            s = s / norm
+        return np.array([float(np.mean(coarse + self.q @ s / c)), *s])
+
+    def lags(self, theta: np.ndarray) -> np.ndarray:
+        if self.basis is None:
+            return theta[0] - self.geom.positions_m @ unit_vector(theta[1], theta[2]) / self.c
+        return theta[0] - self.q @ theta[1:] / self.c
+
+    def jacobian(self, theta: np.ndarray) -> np.ndarray:
+        if self.basis is None:
+            return _jacobian(self.geom.positions_m, theta[1], theta[2], self.c)
+        return np.column_stack([np.ones(len(self.q)), -self.q / self.c])
+
+    def clip(self, theta: np.ndarray) -> np.ndarray:
+        if self.basis is None:
+            theta[2] = float(np.clip(theta[2], -0.5 * np.pi, 0.5 * np.pi))
+        return theta
+
+    def _direction(self, s: np.ndarray) -> np.ndarray:
+        g = self.geom
+        norm = float(np.linalg.norm(s))
+        if norm > 1.0:  # noise beyond a unit vector: the direction in the span
+            s, norm = s / norm, 1.0
+        if g.kind == "planar":
+            side = -1.0 if g.assume == "below" else 1.0
+            return self.basis.T @ s + side * math.sqrt(max(0.0, 1.0 - norm**2)) * g.axis
+        d = g.axis
+        side_dir = np.cross([0.0, 0.0, 1.0], d) * (1.0 if g.assume == "port" else -1.0)
+        return float(s[0]) * d + math.sqrt(max(0.0, 1.0 - float(s[0]) ** 2)) * side_dir
+
+    def angles(self, theta: np.ndarray):
+        """(t0, azimuth, elevation, G): G = ∂(t0, az, el)/∂θ for the covariance (first order)."""
+        if self.basis is None:
+            return float(theta[0]), float(theta[1]), float(theta[2]), np.eye(3)
+
+        def az_el(s):
+            u = self._direction(s)
+            return np.array([math.atan2(u[1], u[0]), math.asin(float(np.clip(u[2], -1, 1)))])
+
+        s = np.asarray(theta[1:], float)
+        ang = az_el(s)
+        G = np.zeros((3, len(theta)))
+        G[0, 0] = 1.0
+        for i in range(len(s)):
+            # a step towards the inside of the unit ball (the map has a kink at its edge, where the
+            # normal component vanishes and the elevation's derivative grows without bound)
+            h = 1e-6 * (-1.0 if s[i] > 0 else 1.0)
+            ds = np.zeros(len(s))
+            ds[i] = h
+            diff = az_el(s + ds) - ang
+            diff[0] = math.remainder(diff[0], 2 * math.pi)
+            G[1:, 1 + i] = diff / h
+        return float(theta[0]), float(ang[0]), float(ang[1]), G
 
 
 def fs_of(corr: ArrayCorrelation) -> float:
@@ -596,25 +662,21 @@ def _echoes(corr: ArrayCorrelation, direct_lags: np.ndarray, direct_amps: np.nda
     return lags[:, :found], amps[:, :found]
 
 
-def _fit_plane_wave(corr: ArrayCorrelation, p: np.ndarray, theta: np.ndarray, c: float, f0: float,
-                    sigma_p_s: float = 0.0, free=(0, 1, 2)) -> np.ndarray:
-    """Step 2: fine lags from the carrier phase at the plane-wave lags, weighted Gauss–Newton on (t0, az, el)."""
+def _fit_plane_wave(corr: ArrayCorrelation, model: _PlaneWave, theta: np.ndarray, f0: float,
+                    sigma_p_s: float = 0.0) -> np.ndarray:
+    """Step 2: fine lags from the carrier phase at the plane-wave lags, weighted Gauss–Newton on θ."""
     theta = np.array(theta, float)
     for _ in range(MAX_ITERATIONS):
-        lags = theta[0] - p @ unit_vector(theta[1], theta[2]) / c
+        lags = model.lags(theta)
         amp = corr.at(lags)
         ref = np.sum(amp * np.abs(amp))  # common phase, weighted towards the strong channels
         fine = lags - np.angle(amp * np.conj(ref)) / (2 * np.pi * f0)
         snr = _snr(amp, corr.noise_var)
         wts = 1.0 / (1.0 / (2.0 * snr * (2 * np.pi * f0) ** 2) + (sigma_p_s) ** 2)
-        J = _jacobian(p, theta[1], theta[2], c)[:, list(free)]
+        J = model.jacobian(theta)
         sw = np.sqrt(wts)
-        step = np.zeros(3)
-        # least squares, not the normal equations: a flat array's elevation near its plane is barely observable
-        step[list(free)] = np.linalg.lstsq(sw[:, None] * J, sw * (fine - lags), rcond=None)[0]
-        theta = theta + step
-        J = _jacobian(p, theta[1], theta[2], c)
-        theta[2] = float(np.clip(theta[2], -0.5 * np.pi, 0.5 * np.pi))
+        step = np.linalg.lstsq(sw[:, None] * J, sw * (fine - lags), rcond=None)[0]
+        theta = model.clip(theta + step)
         if np.max(np.abs(J @ step)) < LAG_TOLERANCE_S:
             break
     return theta
