@@ -67,6 +67,26 @@ def test_rx_array_records_directions(received):
         assert err < 4 * row["sigma_azimuth_body_rad"] + 1e-3  # σ ≈ 0.15° at 12 dB
     meta = json.loads((received / "m.csv.json").read_text())
     assert meta["array"]["spec"] == "tetra:0.08"
+    assert meta["array"]["geometry"] == "volume" and meta["array"]["ambiguity"] is None
+
+
+def test_rx_flat_array_states_its_assumption(received, capsys):
+    # a horizontal ring of 4: accepted, one warning line naming the assumption, the sidecar says it too
+    assert main(["channel", str(received / "beacon.wav"), "--scenario", str(received / "s.toml"), "--array",
+                 "circle4:0.08", "-o", str(received / "flat.wav"), "-q"]) == 0
+    out = received / "flat.csv"
+    assert main(["rx", str(received / "flat.wav"), "--array", "circle4:0.08", "-o", str(out), "-q"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "warning" in err[0] and "assumed below" in err[0]
+    meta = json.loads((received / "flat.csv.json").read_text())
+    assert meta["array"]["geometry"] == "planar" and meta["array"]["assume"] == "below"
+    df = pd.read_csv(out)
+    side = json.loads((received / "flat.json").read_text())
+    assert len(df) == 2 and (df["elevation_body_rad"] <= 0).all()
+    for _, row in df.iterrows():
+        truth = side["truth"][int(row["frame_index"])]["paths"][0]
+        err = abs(math.remainder(row["azimuth_body_rad"] - truth["azimuth_body_rad"], 2 * math.pi))
+        assert err < 4 * row["sigma_azimuth_body_rad"] + 1e-3
 
 
 @pytest.mark.parametrize("argv, expected", [
