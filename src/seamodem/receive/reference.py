@@ -391,7 +391,7 @@ ECHO_Z = 30.0
 #: scales across ±v_max/c at which a chirp's paths are sought before its Doppler is refined
 SCAN_POINTS = 5
 #: the same for a path before the fitted one (a handful of lags are searched there: a lower threshold)
-EARLY_Z = 16.0
+EARLY_Z = 12.0
 
 
 def _real_normal_equations(m: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -543,7 +543,8 @@ class _PathFitter:
     def peaks(self, x, ta: float, eps: float, noise: float) -> np.ndarray:
         """Arrivals of the replica's distinct correlation peaks at ε within (ta − EARLY_WINDOW_S, ta + ECHO_WINDOW_S).
 
-        The strongest always, others when significant (|c|²/(σ² E_q) ≥ ECHO_Z); at most 1 + MAX_ECHOES.
+        The strongest always, others when significant (|c|²/(σ² E_q) ≥ ECHO_Z after the strongest, ≥ EARLY_Z
+        before it) and above the strongest's sidelobes; at most 1 + MAX_ECHOES.
         """
         p = _replica_samples(self.replica, self.fs, self.carrier_hz, eps)
         n = scipy.fft.next_fast_len(len(x) + len(p))
@@ -556,33 +557,62 @@ class _PathFitter:
         # and above the strongest path's own sidelobes (twice the replica's peak sidelobe: a scale off the
         # truth raises them), which would otherwise pass for echoes at high SNR
         floor = max(ECHO_Z, 2 * _peak_sidelobe(self.replica, self.fs, self.carrier_hz) * float(np.max(z)))
+        # a path before the strongest is the first arrival: sought at its own, lower threshold (few lags)
+        early_floor = max(EARLY_Z, floor - ECHO_Z + EARLY_Z)
         chosen: list[int] = []
         for k in np.argsort(-z):
-            if len(chosen) == 1 + MAX_ECHOES or (chosen and z[k] < floor) or z[k] == 0.0:
+            if len(chosen) == 1 + MAX_ECHOES or (chosen and z[k] < early_floor) or z[k] == 0.0:
                 break
+            if chosen and k > chosen[0] and z[k] < floor:
+                continue
             if all(abs(int(k) - j) >= w for j in chosen) and z[k] >= np.max(z[max(0, k - 1) : k + 2]):
                 chosen.append(int(k))
         return lags[chosen]
 
+    def early_path(self, x, ta: float, eps: float, noise: float):
+        """A path just before ``ta``, closer than the peaks can separate (within 3/B), by a GLRT on the joint fit.
+
+        For τ on a half-sample grid over [ta − 3/B, ta − 0.5/B], the two-path fit (τ, t_a) at ε
+        (:meth:`paths_at`); the best is kept when it explains EARLY_Z noise variances more than the fitted
+        path alone (the χ² of a complex amplitude: Exp(1) in noise, as the detector's z). Two paths of
+        opposite sign a chip apart (a surface echo behind an m-sequence) merge into one peak between them.
+
+        Returns
+        -------
+        (times, gains) of the two paths, or None.
+        """
+        lobe = 1.0 / self.replica.reference.bandwidth_hz
+        one = self.paths_at(x, [ta], eps, steps=1)[2]
+        best = None
+        for tau in np.arange(ta - 0.5 * lobe, ta - 3 * lobe, -0.5 / self.fs):
+            times, a, e = self.paths_at(x, [tau, ta], eps)
+            if times[0] < times[1] - 0.5 * lobe and (best is None or e > best[2]):
+                best = (times, a, e)
+        return best[:2] if best is not None and (best[2] - one) / noise >= EARLY_Z else None
+
     def scan_paths(self, x, ta0: float, eps0: float, noise: float, tol: float) -> tuple[np.ndarray, np.ndarray, float]:
         """ε of the joint multi-path likelihood over all of ±limit; every path's arrival and gain.
 
-        At SCAN_POINTS scales across ±limit the paths are found afresh as the replica's significant
-        correlation peaks near the ridge's prediction ta0 − g·(ε − ε0) (:meth:`peaks`) and refined jointly
-        (:meth:`paths_at`); around the best, a dichotomy slides each path along its own delay–Doppler ridge.
+        At SCAN_POINTS scales across ±limit the strongest correlation peak near the ridge's prediction
+        ta0 − g·(ε − ε0) is fitted; at the best of them every significant path is found (:meth:`peaks`), and
+        a dichotomy over ± a grid step slides them along their delay–Doppler ridges, fitted jointly
+        (:meth:`paths_at`).
         On a chirp the single-path profile is nearly flat along the ridge (the detection's bin, picked by the
         noise, can be several bins from the truth), and an echo a few main lobes behind ripples it by its
         sidelobe (≈ ±10 % for a surface echo 0.23 ms behind an LFM 19–29 kHz, enough to move its maximum by
         metres per second): the joint model removes the ripple and leaves the ridge's own curvature.
         """
-        best = (-math.inf, eps0, np.array([ta0]))
+        best = (-math.inf, eps0, ta0)
         grid = np.linspace(-self.limit, self.limit, SCAN_POINTS)
-        for e in grid:
-            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)
+        for e in grid:  # the strongest path alone: which part of the ridge
+            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)[:1]
             times, _, energy = self.paths_at(x, times, e)
             if energy > best[0]:
-                best = (energy, e, times)
-        _, e_ref, t_ref = best
+                best = (energy, e, float(times[0]))
+        # every significant path there (a different set at each scale would favour the scales where a
+        # mismatched replica's sidelobes pass for echoes)
+        _, e_ref, t_strong = best
+        t_ref = self.peaks(x, min(t_strong, ta0 - self.g * (e_ref - eps0)), e_ref, noise)  # from the detector's first path
 
         def explained(e):
             return self.paths_at(x, t_ref - self.g * (e - e_ref), e)[2]
@@ -614,30 +644,6 @@ class _PathFitter:
         k_e = math.sqrt(max(cov[1, 1] / alone[1, 1], 1.0))
         k_ridge = math.sqrt(max((ridge @ cov[:2, :2] @ ridge) / (ridge @ alone[:2, :2] @ ridge), 1.0))
         return k_e, k_ridge
-
-    def find_echo(self, resid, ta: float, eps: float, noise: float) -> float | None:
-        """Arrival of an earlier path (|c|²/(σ² E_q) ≥ EARLY_Z), else of the strongest later one (≥ ECHO_Z), in the residual."""
-        fs = self.fs
-        p = _replica_samples(self.replica, fs, self.carrier_hz, eps)
-        n = scipy.fft.next_fast_len(len(resid) + len(p))
-        c = scipy.fft.ifft(scipy.fft.fft(resid, n) * np.conj(scipy.fft.fft(p, n)))[: len(resid)]
-        lags = self.t[0] + np.arange(len(resid)) / fs
-        # beyond the fitted path's main lobe: within the window after it, or just before it (a direct path
-        # closer to a stronger echo than the detector resolves)
-        lobe = 1.5 / self.replica.reference.bandwidth_hz
-        later = (lags > ta + lobe) & (lags < ta + ECHO_WINDOW_S + 0.5 * self.replica.duration_s)
-        early = (lags < ta - lobe) & (lags > ta - EARLY_WINDOW_S)
-        z = np.abs(c) ** 2 / (noise * float(np.sum(np.abs(p) ** 2)))
-        # an earlier path first (it is the first arrival), at its own threshold: z is Exp(1) in noise and the
-        # early window holds ~EARLY_WINDOW_S·fs lags, so EARLY_Z keeps a false early path below ~1e-5 a ping
-        if np.any(early):
-            k = int(np.argmax(np.where(early, z, 0.0)))
-            if z[k] >= EARLY_Z:
-                return float(lags[k])
-        if not np.any(later):
-            return None
-        k = int(np.argmax(np.where(later, z, 0.0)))
-        return float(lags[k]) if z[k] >= ECHO_Z else None
 
 
 def fit_reference(
@@ -682,15 +688,33 @@ def fit_reference(
     x = r[lo:hi]
     t = t0_s + np.arange(lo, hi) / fs
     path = _PathFitter(replica, t, carrier_hz, fs, g, limit)
-    echoes = []
+    echoes: list = []
     noise = _noise_level(r, fs, t0_s, detection.t_start_s, dur / (1 + detection.eps)) if scan else None
     if scan and noise is not None:
-        # a chirp's ε from the joint likelihood of its paths (see _PathFitter.scan_paths); paths too weak to
-        # matter are dropped, the first arrival is the earliest of FIRST_PATH_FRACTION of the strongest
+        # a chirp's ε from the joint likelihood of its paths (see _PathFitter.scan_paths)
         times, amps, eps = path.scan_paths(x, detection.t_start_s, detection.eps, noise, search_eps / 16)
+    else:
+        ta, eps = path.fit(x, detection.t_start_s, detection.eps, search_eps, grid=True)
+        noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
+        times, amps = np.array([ta]), None
+        if noise is not None:
+            # echoes overlapping the ping leak through the replica's sidelobes and pull the direct path: the
+            # paths are the replica's significant peaks around the fit (an earlier one is the first arrival)
+            times, amps, _ = path.paths_at(x, path.peaks(x, ta, eps, noise), eps)
+            if len(times) == 1 or np.min(times) >= ta - 3.0 / replica.reference.bandwidth_hz:
+                found = path.early_path(x, float(np.min(times)), eps, noise)
+                if found is not None:
+                    times, amps, _ = path.paths_at(x, np.concatenate([found[0], times[times > found[0][1] + 1.0 / replica.reference.bandwidth_hz]]), eps)
+    if amps is None:
+        q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
+        gain = np.vdot(q, x) / float(np.real(np.vdot(q, q)))
+    else:
+        # paths too weak to matter are dropped; the first arrival is the earliest of FIRST_PATH_FRACTION of
+        # the strongest; every path is then polished on the others' residual (SAGE)
         eq_s = float(np.sum(np.abs(_replica_samples(replica, fs, carrier_hz, eps)) ** 2))
-        keep = np.abs(amps) ** 2 * eq_s / noise >= EARLY_Z
-        keep[int(np.argmax(np.abs(amps)))] = True
+        strongest = int(np.argmax(np.abs(amps)))
+        keep = np.abs(amps) ** 2 * eq_s / noise >= np.where(times < times[strongest], EARLY_Z, ECHO_Z)
+        keep[strongest] = True
         order = np.argsort(times[keep])
         times, amps = times[keep][order], amps[keep][order]
         first = int(np.flatnonzero(np.abs(amps) >= FIRST_PATH_FRACTION * np.max(np.abs(amps)))[0])
@@ -698,31 +722,8 @@ def fit_reference(
                  for tp, ap in zip(times, amps)]
         ta, eps, gain, q = paths.pop(first)
         echoes = paths
-        if not echoes:  # the joint Gauss–Newton polish of what the dichotomy's tolerance left (with echoes: below)
+        if not echoes and scan:  # the joint Gauss–Newton polish of what the dichotomy's tolerance left
             ta, eps = path.fit(x, ta, eps, 0.0, grid=False)
-    else:
-        ta, eps = path.fit(x, detection.t_start_s, detection.eps, search_eps, grid=True)
-        q = replica.scaled(t, t_arrival_s=ta, eps=eps, carrier_hz=carrier_hz)
-        gain = np.vdot(q, x) / float(np.real(np.vdot(q, q)))
-        noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
-    if noise is not None and not scan:
-        # echoes overlapping the ping leak through the replica's sidelobes and pull the direct path along
-        # its delay–Doppler ridge: find them in the residual, then fit every path on the others' residual (SAGE)
-        resid = x - gain * q
-        for _ in range(MAX_ECHOES):
-            echo = path.find_echo(resid, ta, eps, noise)
-            if echo is None:
-                break
-            te, ee = path.fit(resid, echo, eps, 0.0, grid=True)
-            qe = replica.scaled(t, t_arrival_s=te, eps=ee, carrier_hz=carrier_hz)
-            ae = np.vdot(qe, resid) / float(np.real(np.vdot(qe, qe)))
-            resid = resid - ae * qe
-            if te < ta and abs(ae) >= FIRST_PATH_FRACTION * abs(gain):
-                # an earlier path, too close to the strongest for the detector to tell apart: the first arrival
-                echoes.append([ta, eps, gain, q])
-                ta, eps, gain, q = te, ee, ae, qe
-            else:
-                echoes.append([te, ee, ae, qe])
     if echoes:
         for _ in range(3):
             others = sum(e[2] * e[3] for e in echoes)
