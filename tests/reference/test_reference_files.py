@@ -158,3 +158,26 @@ def test_option_errors(tmp_path, capsys):
         assert code == 2 and message in err and len(err.strip().splitlines()) == 1
     code = main(["rx", str(wav), "--all-channels", "--emit-start", "0", "--emit-period", "1", "-o", str(tmp_path / "o.csv")])
     assert code == 2 and "only with --reference" in capsys.readouterr().err
+
+
+def test_channel_simulates_a_reference_schedule(tmp_path, capsys):
+    """seamodem tx --reference → seamodem channel (geometry, echoes, 20 dB) → seamodem rx: ranges and speeds of the truth."""
+    wav, chan = tmp_path / "beacon.wav", tmp_path / "heard.wav"
+    assert main(["tx", "--reference", SPEC, "--count", "4", "--period", "1", "--start", "0.2", "-o", str(wav), "-q"]) == 0
+    (tmp_path / "pass.toml").write_text(
+        'mode = "geometry"\nseed = 3\n[environment]\nsound_speed_mps = 1500.0\nwater_depth_m = 30.0\n'
+        '[beacon]\nposition_m = [0.0, 0.0, -10.0]\n[vehicle]\nstart_m = [-200.0, 80.0, -5.0]\nvelocity_mps = [2.0, 0.0, 0.0]\n'
+        '[multipath]\nmax_bounces = 1\nsurface_reflection = -1.0\nbottom_reflection = 0.5\n[noise]\nkind = "white"\nsnr_db = 20.0\n'
+    )
+    assert main(["channel", str(wav), "--scenario", str(tmp_path / "pass.toml"), "-o", str(chan), "-q"]) == 0
+    side = json.loads(chan.with_suffix(".json").read_text())
+    assert side["format"] == "seamodem.reference-sidecar/1" and len(side["truth"]) == 4
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(chan), "--reference", SPEC, "-o", str(out), "-q"]) == 0  # emissions from chan's own sidecar
+    table = pd.read_csv(out)
+    truth = pd.DataFrame(side["truth"])
+    assert list(table["frame_index"]) == [0, 1, 2, 3]
+    err_r = table["range_m"].to_numpy() - truth["range_m"].to_numpy()
+    err_v = table["v_r_mps"].to_numpy() - truth["v_r_mps"].to_numpy()
+    assert np.all(np.abs(err_r) < 3 * table["sigma_range_m"]) and np.all(np.abs(err_r) < 0.05)
+    assert np.all(np.abs(err_v) < 3 * table["sigma_v_r_mps"]) and np.all(np.abs(err_v) < 0.5)

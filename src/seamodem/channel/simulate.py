@@ -338,6 +338,11 @@ def read_input(in_wav: str | Path) -> tuple[soundfile._SoundFileInfo, dict, Fram
     in_wav = Path(in_wav)
     info = wav_info(in_wav)
     side_in = read_sidecar(sidecar_path(in_wav))
+    _check_input(in_wav, info, side_in)
+    return info, side_in, FrameConfig.from_dict(side_in["config"])
+
+
+def _check_input(in_wav: Path, info, side_in: dict) -> None:
     rate = side_in["recording"].get("sample_rate_hz")
     if int(info.samplerate) != rate:
         raise InputFileError(
@@ -347,7 +352,37 @@ def read_input(in_wav: str | Path) -> tuple[soundfile._SoundFileInfo, dict, Fram
         raise InputFileError(f"{in_wav}: has {info.channels} channels; the channel simulator takes a mono recording")
     if info.frames == 0:
         raise InputFileError(f"recording {in_wav} holds no samples")
-    return info, side_in, FrameConfig.from_dict(side_in["config"])
+
+
+def read_reference_input(in_wav: str | Path) -> tuple[soundfile._SoundFileInfo, dict, float, tuple[float, float]] | None:
+    """Header, sidecar, longest ping [s] and band [Hz] of a ``seamodem tx --reference`` schedule; None for others.
+
+    Raises
+    ------
+    InputFileError
+        As :func:`read_input`; a reference sidecar without references or emissions.
+    """
+    import json
+
+    in_wav = Path(in_wav)
+    try:
+        side_in = json.loads(sidecar_path(in_wav).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None  # not there or not JSON: read_input says which
+    from ..transmit.reference import REFERENCE_SIDECAR_FORMAT, ReferenceWaveform
+
+    if not isinstance(side_in, dict) or side_in.get("format") != REFERENCE_SIDECAR_FORMAT:
+        return None
+    if not side_in.get("references") or not side_in.get("frames") or "recording" not in side_in:
+        raise InputFileError(f"reference sidecar {sidecar_path(in_wav)} lacks its references, frames or recording")
+    try:
+        refs = [ReferenceWaveform.from_dict(r) for r in side_in["references"]]
+    except (ConfigError, TypeError, ValueError) as exc:
+        raise InputFileError(f"reference sidecar {sidecar_path(in_wav)}: {exc}") from None
+    info = wav_info(in_wav)
+    _check_input(in_wav, info, side_in)
+    band = (min(r.f_low_hz for r in refs), max(r.f_high_hz for r in refs))
+    return info, side_in, max(r.duration_s for r in refs), band
 
 
 #: An output whose peak exceeds this fraction of full scale is scaled down to OUTPUT_PEAK, so that
@@ -467,14 +502,20 @@ def simulate_file(
         An invalid scenario for this recording.
     """
     out_wav = check_writable(out_wav)
-    info, side_in, config = read_input(in_wav)
+    reference = read_reference_input(in_wav)  # a schedule of reference pings (seamodem tx --reference)
+    if reference is not None:
+        info, side_in, frame_duration_s, band_hz = reference
+        centre_hz = 0.5 * (band_hz[0] + band_hz[1])
+    else:
+        info, side_in, config = read_input(in_wav)
+        frame_duration_s, band_hz, centre_hz = config.frame_duration_s, config.data_band_hz, config.carrier_hz
     fs = float(info.samplerate)
     t_emit = [float(f["t_emit_s"]) for f in side_in["frames"]]
 
     def produce(fin, sink, make_scratch):
         return _run(
-            _WavInput(fin), fs, scenario, t_emit_s=t_emit, frame_duration_s=config.frame_duration_s,
-            band_hz=config.data_band_hz, reference_frequency_hz=config.carrier_hz,
+            _WavInput(fin), fs, scenario, t_emit_s=t_emit, frame_duration_s=frame_duration_s,
+            band_hz=band_hz, reference_frequency_hz=centre_hz,
             make_scratch=make_scratch, sink=sink, progress=progress,
         )
 
