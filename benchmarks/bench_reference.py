@@ -156,7 +156,7 @@ def pair_table(quick: bool) -> list[str]:
         pairs, _ = match(found, sim.truth)
         found = [f for f, _ in pairs]
         truth = {id(f): row for f, row in pairs}
-        pair_up(found, eps_max=5.0 / C)
+        pair_up(found, eps_max=5.0 / C, sound_speed_mps=C)
         errs, sig, e_own, e_pair = [], [], [], []
         for a, b in zip(found, found[1:]):
             if a.role == "preamble" and b.role == "postamble":

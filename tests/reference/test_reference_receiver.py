@@ -157,12 +157,44 @@ def test_hfm_doppler_threshold_and_pair_correction():
     for f in found:
         assert f.fit.sigma_eps * C == pytest.approx(5.0)  # below the Doppler threshold: σ_v = v_max
         assert abs(f.fit.t_arrival_s - arrivals[found.index(f)]) < 3 * f.fit.sigma_t_s
-    pair_up(found, eps_max=5.0 / C)
+    # a constant speed here, and said so: no Doppler change over the packet to allow for (the default allows
+    # 0.3 m/s², which an HFM's own ε cannot measure, and its σ says so; see test_pair_doppler_calibrated_under_acceleration)
+    pair_up(found, eps_max=5.0 / C, max_accel_mps2=0.0)
     assert [f.role for f in found] == ["preamble", "postamble"] * 2
     for i, f in enumerate(found):
         assert abs(f.eps_pair - v / C) < 3 * f.sigma_eps_pair and f.sigma_eps_pair < 3e-7
         # the arrival on the ridge with the pair's ε: within 3σ of the truth, σ ≈ the known-ε bound (< 1 µs)
         assert abs(f.t_pair_s - arrivals[i]) < 3 * f.sigma_t_pair_s and f.sigma_t_pair_s < 1.5e-6
+
+
+def test_pair_doppler_calibrated_under_acceleration():
+    """LFM pre/postambles 8 s apart while the speed changes by 1.2 m/s (0.15 m/s²), 10 dB, scipy.signal.chirp.
+
+    The pair's ε is the packet's mean compression, T_sp/Δ − 1 (Δ the arrivals' spacing). Its ridge spacing
+    alone (a constant speed assumed, max_accel_mps2=0) is off by g·Δε/T_sp ≈ 1.5e-5, far beyond its own σ;
+    with the Doppler change allowed for, every error is within 3σ and σ stays below 5e-6 (≈ 7 mm/s).
+    """
+    rng = np.random.default_rng(21)
+    ping = partial(chirp_ping, f0=19e3, f1=29e3, duration_s=0.05, method="linear")
+    starts = 0.4 + 10.0 * np.arange(4) + rng.uniform(0, 0.1, 4)
+    v_pre = np.array([2.0, -1.0, 0.5, -2.5])
+    v_post = v_pre - 1.2
+    spacing = 8.0 / (1 + 0.5 * (v_pre + v_post) / C)
+    arrivals = np.ravel(np.column_stack([starts, starts + spacing]))
+    x = received(ping, fs=FS, duration_s=arrivals[-1] + 0.5, arrivals_s=arrivals,
+                 v_mps=np.ravel(np.column_stack([v_pre, v_post])), ping_duration_s=0.05)
+    x = add_noise(x, fs=FS, ping=ping, band_hz=(19e3, 29e3), ping_duration_s=0.05, snr_db=10, rng=rng)
+    ref = ReferenceWaveform(kind="lfm", f_low_hz=19e3, f_high_hz=29e3, duration_s=0.05, postamble_s=8.0)
+    _, found = _run([ref], x, v_max_mps=5.0)
+    assert len(found) == 8
+    truth = 8.0 / spacing - 1
+    pair_up(found, eps_max=5.0 / C, max_accel_mps2=0.0)
+    naive = np.array([f.eps_pair for f in found[::2]]) - truth
+    assert np.all(np.abs(naive) > 3 * np.array([f.sigma_eps_pair for f in found[::2]]))
+    pair_up(found, eps_max=5.0 / C)
+    err = np.array([f.eps_pair for f in found[::2]]) - truth
+    sigma = np.array([f.sigma_eps_pair for f in found[::2]])
+    assert np.all(np.abs(err) < 3 * sigma) and np.all(sigma < 5e-6)
 
 
 def test_several_references_each_detection_names_its_own():

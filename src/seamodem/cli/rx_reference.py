@@ -182,7 +182,7 @@ def run_reference(args: argparse.Namespace) -> int:
         f.clipped = source.clips.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
     found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
     found = keep_matching_reference(found)
-    pair_up(found, eps_max=args.v_max / sound_speed)
+    pair_up(found, eps_max=args.v_max / sound_speed, sound_speed_mps=sound_speed)
     records = [
         to_record(f, emissions[f.reference.name], sound_speed_mps=sound_speed, clock_offset_s=args.clock_offset)
         for f in found

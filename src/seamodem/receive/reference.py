@@ -590,13 +590,13 @@ class _PathFitter:
                 best = (times, a, e)
         return best[:2] if best is not None and (best[2] - one) / noise >= EARLY_Z else None
 
-    def scan_paths(self, x, ta0: float, eps0: float, noise: float, tol: float) -> tuple[np.ndarray, np.ndarray, float]:
+    def scan_paths(self, x, ta0: float, eps0: float, noise: float) -> tuple[np.ndarray, np.ndarray, float]:
         """ε of the joint multi-path likelihood over all of ±limit; every path's arrival and gain.
 
-        At SCAN_POINTS scales across ±limit the strongest correlation peak near the ridge's prediction
-        ta0 − g·(ε − ε0) is fitted; at the best of them every significant path is found (:meth:`peaks`), and
-        a dichotomy over ± a grid step slides them along their delay–Doppler ridges, fitted jointly
-        (:meth:`paths_at`).
+        At SCAN_POINTS scales across ±limit the significant correlation peaks near the ridge's prediction
+        ta0 − g·(ε − ε0) (:meth:`peaks`) are fitted jointly (:meth:`paths_at`), each path beyond the first
+        paying its threshold ECHO_Z; around the best scale, the paths slide along their delay–Doppler ridges
+        and the profile's vertex is interpolated.
         On a chirp the single-path profile is nearly flat along the ridge (the detection's bin, picked by the
         noise, can be several bins from the truth), and an echo a few main lobes behind ripples it by its
         sidelobe (≈ ±10 % for a surface echo 0.23 ms behind an LFM 19–29 kHz, enough to move its maximum by
@@ -604,21 +604,32 @@ class _PathFitter:
         """
         best = (-math.inf, eps0, ta0)
         grid = np.linspace(-self.limit, self.limit, SCAN_POINTS)
-        for e in grid:  # the strongest path alone: which part of the ridge
-            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)[:1]
-            times, _, energy = self.paths_at(x, times, e)
-            if energy > best[0]:
-                best = (energy, e, float(times[0]))
-        # every significant path there (a different set at each scale would favour the scales where a
-        # mismatched replica's sidelobes pass for echoes)
+        for e in grid:
+            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)
+            times, _, energy = self.paths_at(x, times, e, steps=1)
+            # each path beyond the first pays its detection threshold: otherwise the scales where a
+            # mismatched replica's sidelobes pass for echoes would win by fitting them
+            score = energy - ECHO_Z * noise * (len(times) - 1)
+            if score > best[0]:
+                best = (score, e, float(times[0]))
+        # every significant path at the best scale, found again from the strongest one there
         _, e_ref, t_strong = best
         t_ref = self.peaks(x, min(t_strong, ta0 - self.g * (e_ref - eps0)), e_ref, noise)  # from the detector's first path
 
         def explained(e):
             return self.paths_at(x, t_ref - self.g * (e - e_ref), e)[2]
 
-        step = grid[1] - grid[0]
-        e = dichotomy_max(explained, max(e_ref - step, -self.limit), min(e_ref + step, self.limit), tol=tol)
+        # the profile's vertex from three points half a step apart (a parabola; the Gauss–Newton polish of
+        # every path that follows finishes), kept if it beats them
+        h = 0.5 * (grid[1] - grid[0])
+        pts = [e_ref - h, e_ref, e_ref + h]
+        vals = [explained(e) for e in pts]
+        curv = vals[0] - 2 * vals[1] + vals[2]
+        if curv < 0:
+            e = float(np.clip(e_ref + 0.5 * h * (vals[0] - vals[2]) / curv, e_ref - 2 * h, e_ref + 2 * h))
+            pts.append(e)
+            vals.append(explained(e))
+        e = float(np.clip(pts[int(np.argmax(vals))], -self.limit, self.limit))
         times, amps, _ = self.paths_at(x, t_ref - self.g * (e - e_ref), e)
         return times, amps, e
 
@@ -692,7 +703,7 @@ def fit_reference(
     noise = _noise_level(r, fs, t0_s, detection.t_start_s, dur / (1 + detection.eps)) if scan else None
     if scan and noise is not None:
         # a chirp's ε from the joint likelihood of its paths (see _PathFitter.scan_paths)
-        times, amps, eps = path.scan_paths(x, detection.t_start_s, detection.eps, noise, search_eps / 16)
+        times, amps, eps = path.scan_paths(x, detection.t_start_s, detection.eps, noise)
     else:
         ta, eps = path.fit(x, detection.t_start_s, detection.eps, search_eps, grid=True)
         noise = _noise_level(r, fs, t0_s, ta, dur / (1 + eps))
@@ -997,8 +1008,23 @@ def keep_matching_reference(found: list[_Found]) -> list[_Found]:
     return out
 
 
-def pair_up(found: list[_Found], *, eps_max: float) -> None:
-    """Mark pre/postamble pairs of references with ``postamble_s`` and set their pair Doppler (in place)."""
+#: largest radial acceleration assumed over a pre/postamble packet [m/s²] (:func:`pair_up`)
+MAX_ACCEL_MPS2 = 0.3
+
+
+def pair_up(found: list[_Found], *, eps_max: float, max_accel_mps2: float = MAX_ACCEL_MPS2,
+            sound_speed_mps: float = 1500.0) -> None:
+    """Mark pre/postamble pairs of references with ``postamble_s`` and set their pair Doppler (in place).
+
+    Each ping's ridge coordinate r = t_a + g·ε is measured to its known-ε bound (≈ 1 µs), far better than
+    t_a (its Doppler error slides it along the ridge). With the Doppler changing over the packet,
+    ε_pre = ε̄ − δ, ε_post = ε̄ + δ (δ = a·T_sp/(2c)), the ridge spacing is Δ + 2gδ, Δ = T_sp/(1 + ε̄) the
+    arrivals' spacing. δ is estimated from the pings' own ε's, (ε̂_post − ε̂_pre)/2, shrunk towards 0 by a
+    uniform prior |a| ≤ ``max_accel_mps2`` (best linear estimate; the pings' own ε's dominate when they
+    are precise, the prior when they are not, as an HFM's). Then ε̄ = T_sp/(r_post − r_pre − 2gδ̃) − 1 with
+    σ_ε̄ = (T_sp/Δ²)·√(σ_r,pre² + σ_r,post² + 4g²·var δ̃) (:func:`pair_doppler` for the spacing alone).
+    Each ping's arrival on its ridge at its own ε̄ ∓ δ̃: t = r − g·(ε̄ ∓ δ̃).
+    """
     by_ref: dict[str, list[_Found]] = {}
     for f in found:
         if f.reference.postamble_s:
@@ -1011,16 +1037,23 @@ def pair_up(found: list[_Found], *, eps_max: float) -> None:
             sp = a.reference.postamble_s
             delta = b.fit.ridge_t_s - a.fit.ridge_t_s
             if abs(delta - sp) <= 2 * eps_max * sp + 0.01 * a.reference.duration_s:
+                g = a.fit.ridge_slope_s
+                var_prior = (max_accel_mps2 * sp / (2 * sound_speed_mps)) ** 2 / 3
+                var_own = (a.fit.sigma_eps**2 + b.fit.sigma_eps**2) / 4
+                gain = var_prior / (var_prior + var_own) if var_prior + var_own > 0 else 0.0
+                half_change = gain * (b.fit.eps - a.fit.eps) / 2
+                var_half = var_prior * var_own / (var_prior + var_own) if var_prior + var_own > 0 else 0.0
+                spacing = delta - 2 * g * half_change
                 eps, sigma = pair_doppler(
-                    a.fit.ridge_t_s, b.fit.ridge_t_s, a.fit.sigma_ridge_s, b.fit.sigma_ridge_s, spacing_s=sp
+                    a.fit.ridge_t_s, a.fit.ridge_t_s + spacing,
+                    a.fit.sigma_ridge_s, math.hypot(b.fit.sigma_ridge_s, 2 * g * math.sqrt(var_half)), spacing_s=sp,
                 )
                 a.role, b.role = "preamble", "postamble"
-                for f in (a, b):
+                for f, sign in ((a, -1.0), (b, 1.0)):
                     f.eps_pair, f.sigma_eps_pair = eps, sigma
                     # the ping's own ε moves its arrival along the ridge; the pair's ε puts it back (HFM coupling)
-                    g = f.fit.ridge_slope_s
-                    f.t_pair_s = f.fit.ridge_t_s - g * eps
-                    f.sigma_t_pair_s = math.hypot(f.fit.sigma_ridge_s, g * sigma)
+                    f.t_pair_s = f.fit.ridge_t_s - g * (eps + sign * half_change)
+                    f.sigma_t_pair_s = math.hypot(f.fit.sigma_ridge_s, g * math.hypot(sigma, math.sqrt(var_half)))
                 i += 2
             else:
                 i += 1
