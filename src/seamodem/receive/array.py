@@ -399,7 +399,7 @@ def _check_positions(positions_m: np.ndarray, assume: str | None = None) -> np.n
     return array_geometry(positions_m, assume).positions_m
 
 
-def _coarse_lags(corr: ArrayCorrelation, max_lag_s: float, fs_grid: float = 1e6) -> np.ndarray:
+def _coarse_lags(corr: ArrayCorrelation, max_lag_s: float, fs_grid: float = 2.5e5) -> np.ndarray:
     """Each channel's envelope peak |c_k| within ±max_lag_s [s], refined by a parabola."""
     grid = np.arange(-max_lag_s, max_lag_s + 0.5 / fs_grid, 1.0 / fs_grid)
     mag = np.abs(corr.at(np.broadcast_to(grid, (corr.spectra.shape[0], grid.size))))
@@ -870,17 +870,22 @@ class ArrayDetector:
         K = r.shape[1]
         L = b.length
         out = np.empty(len(lags))
-        for s0 in range(0, len(lags), 4096):  # bounded memory: cumulative Gram sums per block of lags
-            j = lags[s0:s0 + 4096]
-            lo, hi = int(j[0]), int(j[-1]) + L
-            seg = r[lo:hi]
-            prod = (seg[:, :, None] * np.conj(seg[:, None, :])).reshape(hi - lo, K * K)
-            cs = np.concatenate([np.zeros((1, K * K), complex), np.cumsum(prod, axis=0)])
-            M = (cs[j - lo + L] - cs[j - lo]).reshape(len(j), K, K)
-            M = M + (1e-9 * np.real(np.trace(M, axis1=1, axis2=2)) / K + np.finfo(float).tiny)[:, None, None] * np.eye(K)
-            cj = c[s0:s0 + 4096].astype(complex)
-            q = np.linalg.solve(M, cj[:, :, None])[:, :, 0]
-            out[s0:s0 + 4096] = np.real(np.sum(np.conj(cj) * q, axis=1)) / b.template_energy
+        # runs of lags whose windows overlap share one cumulative Gram sum over their span
+        breaks = np.flatnonzero(np.diff(lags) > L) + 1
+        for run in np.split(np.arange(len(lags)), breaks):
+            for s0 in range(0, len(run), 4096):  # bounded memory
+                sel = run[s0:s0 + 4096]
+                j = lags[sel]
+                lo, hi = int(j[0]), int(j[-1]) + L
+                seg = r[lo:hi]
+                prod = (seg[:, :, None] * np.conj(seg[:, None, :])).reshape(hi - lo, K * K)
+                cs = np.concatenate([np.zeros((1, K * K), complex), np.cumsum(prod, axis=0)])
+                M = (cs[j - lo + L] - cs[j - lo]).reshape(len(j), K, K)
+                M = M + (1e-9 * np.real(np.trace(M, axis1=1, axis2=2)) / K
+                         + np.finfo(float).tiny)[:, None, None] * np.eye(K)
+                cj = c[sel].astype(complex)
+                q = np.linalg.solve(M, cj[:, :, None])[:, :, 0]
+                out[sel] = np.real(np.sum(np.conj(cj) * q, axis=1)) / b.template_energy
         return out
 
     def find_all(self, bb: np.ndarray):
