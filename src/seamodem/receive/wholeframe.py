@@ -22,8 +22,8 @@ is run at the path's symbol instants, the known symbols are stripped
 (z_k = y_k x_k*), and the phase of z summed over ``n_segments`` consecutive
 segments is fitted by weighted least squares with a line and a parabola in
 time; the line's slope is the Doppler correction, the parabola the drift.
-Sweeps repeat until none moves a path's Doppler by a tenth of its σ (2–3
-sweeps): the paths interfere only through the data's random cross-correlation
+Sweeps repeat until none moves a path's Doppler by a quarter of its σ nor its
+delay by its σ (3 sweeps): the paths interfere only through the data's random cross-correlation
 once their delays differ by a symbol or more. The matched filter and the
 synthesis of each path's contribution are computed in the FFT domain on the
 frame's stretch of baseband (:class:`_Segment`), the pulse's time scale exact.
@@ -120,6 +120,10 @@ def _phase(config: FrameConfig, t_rel: np.ndarray, eps: float, beta: float) -> n
 #: symbol instants by 6-point Lagrange interpolation (symbols are spread onto that grid by its
 #: transpose): for the data band's ±4.5 kHz at 13.7 kHz × 4, error ≤ 8.5e-5 of the signal (−81 dB)
 _UPSAMPLE = 4
+#: the fit stops after a sweep that moved no path's Doppler, nor its delay, by this many of its σ: the
+#: sweeps contract (a delay step of 0.7σ is followed by one of 0.01σ), so the last step taken is the
+#: error left, within a tenth or so of it
+_STEP_DOPPLER, _STEP_DELAY = 0.25, 1.0
 _TAPS = np.arange(-2, 4)  # the interpolator's sample offsets around a position
 
 
@@ -143,10 +147,15 @@ def _lagrange_basis() -> np.ndarray:
 _BASIS = _lagrange_basis()
 
 
-def _lagrange(pos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lagrange interpolation on the points ``_TAPS`` around fractional grid positions: (floor, weights (n, 6))."""
+def _lagrange(pos: np.ndarray, derivative: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Lagrange interpolation on the points ``_TAPS`` around fractional grid positions: (floor, weights (n, 6));
+    with ``derivative``, the weights of the interpolating polynomial's derivative [per grid step]
+    (error ≤ 5.6e-4 of the band edge's 2πf for the data band at ×4)."""
     i = np.floor(pos).astype(np.int64)
-    return i, np.vander(pos - i, len(_TAPS), increasing=True) @ _BASIS
+    powers = np.vander(pos - i, len(_TAPS), increasing=True)
+    if derivative:
+        powers = np.hstack([np.zeros((len(pos), 1)), powers[:, :-1] * np.arange(1, len(_TAPS))])
+    return i, powers @ _BASIS
 
 
 class _Segment:
@@ -194,21 +203,19 @@ class _Segment:
     def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float,
                derivative: bool = False):
         """Matched-filter outputs at ``instants_s`` of r with ``offset_hz`` (phase 0 at ``t_ref_s``) removed;
-        with ``derivative``, also their time derivative dy/dt [1/s] (the filter's spectrum times j2πf)."""
+        with ``derivative``, also their time derivative dy/dt [1/s] (the interpolating polynomial's)."""
         period, h = self._pulse(scale)
         x = r * np.exp(-2j * np.pi * offset_hz * (self.t_s - t_ref_s)) if offset_hz else r
-        spec = self._fft.fft(x, self.m)[self.band] * h
+        up = np.zeros(self.big, complex)
+        up[self.band_big] = self._fft.fft(x, self.m)[self.band] * h
+        c = self._fft.ifft(up) * (_UPSAMPLE / math.sqrt(period))
         idx, w = self._grid(instants_s)
-
-        def read(band_values):
-            up = np.zeros(self.big, complex)
-            up[self.band_big] = band_values
-            c = self._fft.ifft(up) * _UPSAMPLE
-            return np.einsum("kj,kj->k", c[idx], w) / math.sqrt(period)
-
+        values = c[idx]
+        y = np.einsum("kj,kj->k", values, w)
         if not derivative:
-            return read(spec)
-        return read(spec), read(spec * (2j * np.pi * self.band_hz))
+            return y
+        _, dw = _lagrange((instants_s - self.t0_s) * self.fs * _UPSAMPLE, derivative=True)
+        return y, np.einsum("kj,kj->k", values, dw) * (self.fs * _UPSAMPLE)
 
     def synthesize(self, symbols: np.ndarray, instants_s: np.ndarray, *, scale: float) -> np.ndarray:
         """Σ x_k √T' h(t_n − t_k) on the segment's grid, without the carrier phase."""
@@ -255,8 +262,9 @@ def fit_whole_frame(
         Segments whose phases the Doppler and the drift are fitted to.
     sweeps : int
         Most passes over the paths; the fit stops after a pass that moved no
-        path's Doppler by a tenth of its σ (the first pass of several paths
-        always has a second: it ran before the later paths were subtracted).
+        path's Doppler by a quarter of its σ nor its delay by its σ (the first pass always
+        has a second: it ran before the later paths were subtracted, and the
+        delays are updated from the second pass on).
     """
     c = sound_speed_mps
     f0 = config.carrier_hz
@@ -329,8 +337,8 @@ def fit_whole_frame(
     quarter = config.symbol_period_s / 4
     # SAGE: each sweep filters every path once, the others' fitted contributions removed. The
     # Doppler found moves the symbol instants, so a path, a lone one too, is filtered again in
-    # the next sweep; the fit stops after a sweep that moved no path's Doppler by a tenth of its
-    # σ (three paths at 12 dB: 3 sweeps, 10 filters and 9 syntheses; a lone path: 1–2 filters)
+    # the next sweep; the fit stops after a sweep that moved no path's Doppler by a quarter of
+    # its σ nor its delay by its σ (three paths at 12 dB: 3 sweeps, 10 filters and 9 syntheses)
     for sweep in range(sweeps):
         moved = False
         for p in range(n_paths):
@@ -339,8 +347,9 @@ def fit_whole_frame(
             delta, sigma_d[p] = timing_fit(z, dz, p)
             eps[p] += coef[1] / (2 * np.pi * f0)
             beta[p] += coef[2] / (np.pi * f0)
-            delays[p] -= float(np.clip(delta, -quarter, quarter))
-            moved |= bool(abs(coef[1]) > 0.1 * sigma_b[p] or abs(delta) > 0.1 * sigma_d[p])
+            if sweep > 0:  # the first sweep's Doppler error skews the instants' timing (overshoots by 10σ)
+                delays[p] -= float(np.clip(delta, -quarter, quarter))
+            moved |= bool(abs(coef[1]) > _STEP_DOPPLER * sigma_b[p] or abs(delta) > _STEP_DELAY * sigma_d[p])
             # the amplitude from the outputs, less the phase the update added to the model
             # (c1·(t − τ_p) + c2·((t − t_c)² − (D/2)²)); the update moves the instants by a hair
             tk = inst - (delays[p] + half)
@@ -349,7 +358,7 @@ def fit_whole_frame(
                 new = model(p)
                 total += new - models[p]
                 models[p] = new
-        if not moved and (sweep > 0 or n_paths == 1):
+        if not moved and sweep > 0:
             break
     if n_paths == 1:
         total = model(0)
