@@ -150,8 +150,9 @@ class Receiver:
         disagreement beyond the bank's own 3σ is added to the tone's σ: the
         bias it reveals is what the tone's CRLB does not cover. A fit on
         decisions (CRC failed) that disagrees with the tone by more than 3
-        combined σ (the tone's with that gap) is not used: the tone is then the
-        estimate, and the pilot's arrival the range.
+        combined σ (the tone's with that gap), or whose σ is not below the
+        tone's, is not used: the tone is then the estimate, and the pilot's
+        arrival the range.
         """
         c = self.settings.sound_speed_mps
         v_tone = m.v_tone_ml_mps
@@ -163,8 +164,9 @@ class Receiver:
         if fit is not None and fit[2] == "whole_frame_decisions" and math.isfinite(v_tone):
             # decided symbols can be wrong in runs and pull the fit away (1 frame in 100 at 6–12 dB in
             # the benchmark's deep echoes, −97 mm/s with σ 20 mm/s): kept only when the tone agrees
-            v = float(fit[0].v_mps[fit[1]])
-            if not abs(v - v_tone) <= 3 * math.hypot(float(fit[0].sigma_v_mps[fit[1]]), sigma_tone_gap):
+            # and the fit's σ is the smaller
+            v, sigma = float(fit[0].v_mps[fit[1]]), float(fit[0].sigma_v_mps[fit[1]])
+            if not (abs(v - v_tone) <= 3 * math.hypot(sigma, sigma_tone_gap) and sigma < sigma_tone_gap):
                 fit = None
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
             wf, first, source = fit
