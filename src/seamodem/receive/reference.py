@@ -567,7 +567,15 @@ class _PathFitter:
                 continue
             if all(abs(int(k) - j) >= w for j in chosen) and z[k] >= np.max(z[max(0, k - 1) : k + 2]):
                 chosen.append(int(k))
-        return lags[chosen]
+        # sub-sample: the vertex of a parabola through |c| at the peak and its neighbours
+        out = lags[chosen].astype(float)
+        for m, k in enumerate(chosen):
+            if 0 < k < len(z) - 1:
+                a0, a1, a2 = np.sqrt(z[k - 1 : k + 2])
+                curv = a0 - 2 * a1 + a2
+                if curv < 0:
+                    out[m] += 0.5 * (a0 - a2) / curv / self.fs
+        return out
 
     def early_path(self, x, ta: float, eps: float, noise: float):
         """A path just before ``ta``, closer than the peaks can separate (within 3/B), by a GLRT on the joint fit.
@@ -606,7 +614,7 @@ class _PathFitter:
         grid = np.linspace(-self.limit, self.limit, SCAN_POINTS)
         for e in grid:
             times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)
-            times, _, energy = self.paths_at(x, times, e, steps=1)
+            times, _, energy = self.paths_at(x, times, e, steps=0)  # peaks interpolated to a fraction of a sample
             # each path beyond the first pays its detection threshold: otherwise the scales where a
             # mismatched replica's sidelobes pass for echoes would win by fitting them
             score = energy - ECHO_Z * noise * (len(times) - 1)
