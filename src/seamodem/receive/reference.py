@@ -22,13 +22,18 @@ The same steps as the frame receiver, with the frame's pilot replaced by a
    r(t) = A e^{jθ} s_a((1 + ε)(t − t_a)) + w, |C(t_a, ε)| = |Σ r q*| with
    the replica evaluated at arbitrary times: ε by dichotomy
    (:func:`~seamodem.receive.doppler.dichotomy_max`, paper 002's bank +
-   dichotomy), t_a by dichotomy along the delay–Doppler ridge for each ε.
+   dichotomy), t_a by Gauss–Newton along the delay–Doppler ridge for each ε.
+   Echoes: the replica's distinct correlation peaks, fitted jointly, the first
+   arrival the earliest of 0.3× the strongest (a merged earlier path by a GLRT).
+   A chirp (a ridge longer than its main lobe) takes ε from the joint
+   multi-path likelihood over all of ±v_max/c (:meth:`_PathFitter.scan_paths`).
 4. **σ's**: the joint CRLB of the reference (:func:`~seamodem.transmit.reference.reference_crlb`)
    at the measured E/N0, inflated by √χ² of the fit's residual when echoes or
    a varying Doppler leave more than noise.
-5. **Pairs** (:func:`pair_doppler`): a preamble and a postamble of known
-   spacing T_sp give ε = T_sp/Δ − 1 from their measured spacing Δ, using each
-   ping's ridge coordinate so that the delay–Doppler coupling cancels.
+5. **Pairs** (:func:`pair_up`, :func:`pair_doppler`): a preamble and a postamble
+   of known spacing T_sp give ε = T_sp/Δ − 1 from their measured spacing Δ, using
+   each ping's ridge coordinate so that the delay–Doppler coupling cancels, and
+   allowing for a Doppler change over the packet.
 """
 
 from __future__ import annotations
