@@ -21,6 +21,7 @@ from seamodem.receive.array import (
     array_correlation,
     array_geometry,
     baseband_correlation,
+    blank_like_reference,
     estimate_doa,
     front_end_array,
     receive_array,
@@ -221,3 +222,18 @@ def test_receive_array_warns_of_a_flat_array_assumption(tmp_path):
     assert len(recs) == 1 and recs[0].n_channels == 4
     assert abs(math.remainder(recs[0].azimuth_body_rad - truth["azimuth_body_rad"], 2 * math.pi)) < 5 * recs[0].sigma_azimuth_body_rad
     assert recs[0].elevation_body_rad < 0
+
+
+def test_a_click_blanked_on_the_reference_is_blanked_on_every_element():
+    # a click reaching the 4 elements up to 5 samples apart (8 cm at 96 kHz): the impulse blanker runs on
+    # channel 0 only; its stretch, widened by the spread, zeroes the click on every channel and little else
+    from seamodem.receive.impulse import blank_impulses
+
+    rng = np.random.default_rng(9)
+    x = 0.1 * rng.standard_normal((20000, 4))
+    for k, lag in enumerate((0, 5, -4, 3)):
+        x[10000 + lag, k] += 50.0
+    y0, _ = blank_impulses(x[:, 0])
+    y = blank_like_reference(x, y0, 0, 6)
+    assert np.all(np.abs(y[9990:10010]) < 1.0)
+    assert np.count_nonzero(np.all(y == 0.0, axis=1)) < 40

@@ -64,6 +64,7 @@ __all__ = [
     "DoaEstimate",
     "array_geometry",
     "baseband_correlation",
+    "blank_like_reference",
     "front_end_array",
     "array_correlation",
     "estimate_doa",
@@ -925,13 +926,31 @@ def _splice(y: np.ndarray, channels: np.ndarray, fs: float, centre_hz: float, t_
     y[i0:i1] = ramp * beam + np.sqrt(1.0 - ramp**2) * y[i0:i1]
 
 
+def blank_like_reference(x: np.ndarray, blanked_reference: np.ndarray, reference_channel: int,
+                         spread_samples: int) -> np.ndarray:
+    """x with every channel zeroed where the reference channel was blanked, widened by ``spread_samples``.
+
+    A click reaches elements a few centimetres apart within aperture/c of each
+    other (5 samples for 8 cm at 96 kHz): the reference channel's blanked
+    stretches, widened by that much on either side, cover it on every element.
+    """
+    ref = x[:, reference_channel]
+    hit = (blanked_reference == 0.0) & (ref != 0.0)
+    if not hit.any():
+        return x
+    if spread_samples > 0:
+        counts = np.convolve(hit.astype(np.int32), np.ones(2 * spread_samples + 1, np.int32), mode="same")
+        hit = counts > 0
+    return np.where(hit[:, None], 0.0, x)
+
+
 def front_end_array(x: np.ndarray, fs: float, config: FrameConfig, settings: ReceiverSettings,
-                    reference_channel: int = 0):
+                    reference_channel: int = 0, spread_samples: int = 8):
     """Basebands of every channel: (plan, bb (n, K), tone (n_t, K), blanker or None).
 
-    Impulses are found on the reference channel and its blanked samples are
-    zeroed on every channel (a click reaches elements a few centimetres apart
-    within a few samples, inside the blanker's guard): one blanker's cost, not K.
+    Impulses are found on the reference channel and zeroed on every channel
+    (:func:`blank_like_reference`, ``spread_samples`` either side): one
+    blanker's cost, not K.
     """
     from .frontend import FrontEnd, plan_front_end
     from .impulse import ImpulseBlanker
@@ -944,7 +963,7 @@ def front_end_array(x: np.ndarray, fs: float, config: FrameConfig, settings: Rec
         ref = x[:, reference_channel]
         y0 = np.concatenate([blanker.push(ref), blanker.flush()])
         if blanker.n_blanked:
-            x = np.where(((y0 == 0.0) & (ref != 0.0))[:, None], 0.0, x)
+            x = blank_like_reference(x, y0, reference_channel, spread_samples)
     bbs, tones = [], []
     for k in range(x.shape[1]):
         fe = FrontEnd(plan)
@@ -1024,7 +1043,9 @@ def receive_array(
     s = ReceiverSettings() if settings is None else settings
     c = s.sound_speed_mps
     pilot = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else np.asarray(pilot, complex)
-    plan, bb, tone, blanker = front_end_array(x, fs, config, s, reference_channel)
+    aperture_m = float(np.max(np.linalg.norm(positions_m[:, None] - positions_m[None], axis=-1)))
+    spread = math.ceil(aperture_m / c * fs) + 1  # a click's spread over the elements [samples]
+    plan, bb, tone, blanker = front_end_array(x, fs, config, s, reference_channel, spread)
     if complex_gains is not None:
         g = np.asarray(complex_gains, complex)[None, :]
         bb, tone = bb / g, tone / g
