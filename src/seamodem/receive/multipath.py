@@ -33,11 +33,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 
 from ..config import FrameConfig
 from ..dsp import UniformTable
 from .detect import pilot_template
-from .doppler import dichotomy_max, matched_filter
+from .doppler import dichotomy_max, matched_filter, table_read
 
 __all__ = ["PathFit", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine"]
 
@@ -88,6 +89,73 @@ def _response_table(rolloff: float, rho: tuple, half_extent_symbols: int) -> Uni
         half_extent_symbols,
         _RESPONSE_TABLE_RATE,
     )
+
+
+@njit(cache=True, nogil=True)
+def _ls_residual_energy(store, index, corr):
+    """min_b ‖corr − M b‖², M's real columns ``store[index]``, by the normal equations (Cholesky of MᵀM).
+
+    The residual energy is stationary in b, so it agrees with :func:`numpy.linalg.lstsq`'s
+    (SVD) to second order in the solve's rounding: the dichotomy on it takes the same steps
+    (records identical, tests/receive/test_identical_records.py). Returns −1 when MᵀM is
+    numerically singular (a Cholesky pivot below 1e-10 of its diagonal: delays within
+    ~1e-5 symbol of each other), for the caller to fall back to ``lstsq``.
+    """
+    n = index.size
+    m = corr.size
+    gram = np.zeros((n, n))
+    pr = np.zeros(n)
+    pi = np.zeros(n)
+    for a in range(n):
+        ca = store[index[a]]
+        sr = 0.0
+        si = 0.0
+        for k in range(m):
+            sr += ca[k] * corr[k].real
+            si += ca[k] * corr[k].imag
+        pr[a] = sr
+        pi[a] = si
+        for b in range(a + 1):
+            cb = store[index[b]]
+            acc = 0.0
+            for k in range(m):
+                acc += ca[k] * cb[k]
+            gram[a, b] = acc
+            gram[b, a] = acc
+    low = np.zeros((n, n))
+    for j in range(n):
+        d = gram[j, j]
+        for p in range(j):
+            d -= low[j, p] * low[j, p]
+        if not d > 1e-10 * gram[j, j]:
+            return -1.0
+        low[j, j] = math.sqrt(d)
+        for i in range(j + 1, n):
+            acc = gram[i, j]
+            for p in range(j):
+                acc -= low[i, p] * low[j, p]
+            low[i, j] = acc / low[j, j]
+    for rhs in (pr, pi):  # L Lᵀ x = rhs, in place
+        for i in range(n):
+            acc = rhs[i]
+            for p in range(i):
+                acc -= low[i, p] * rhs[p]
+            rhs[i] = acc / low[i, i]
+        for i in range(n - 1, -1, -1):
+            acc = rhs[i]
+            for p in range(i + 1, n):
+                acc -= low[p, i] * rhs[p]
+            rhs[i] = acc / low[i, i]
+    energy = 0.0
+    for k in range(m):
+        er = corr[k].real
+        ei = corr[k].imag
+        for a in range(n):
+            c = store[index[a], k]
+            er -= pr[a] * c
+            ei -= pi[a] * c
+        energy += er * er + ei * ei
+    return energy
 
 
 def fit_paths(
@@ -155,33 +223,45 @@ def fit_paths(
     corr = windows @ np.conj(template)
     cand = t0_s + m / fs - tau_a
 
-    columns: dict[float, np.ndarray] = {}
+    # one path's response R(t − delay) at every candidate, interpolated in a table of
+    # R(uT) = Σ_d ρ_d rc((u − d)T); cached (rows of ``store``), since the dichotomy moves one delay at a time
+    rows: dict[float, int] = {}
+    store = np.empty((16, cand.size))
     extent = (cand[-1] - cand[0]) / T + 2 * half_window_symbols + 4
     if window_s is not None:
         extent += (window_s[1] - window_s[0]) / T
     table = _response_table(float(config.rolloff), tuple(rho.tolist()), int(2 ** math.ceil(math.log2(extent))))
 
-    def column(delay):
-        # one path's response R(t − delay) at every candidate, interpolated in a table of
-        # R(uT) = Σ_d ρ_d rc((u − d)T); cached, since the dichotomy moves one delay at a time
+    def row(delay) -> int:
+        nonlocal store
         key = float(delay)
-        if key not in columns:
-            columns[key] = table((cand - key) / T)
-        return columns[key]
+        if key not in rows:
+            if len(rows) == store.shape[0]:
+                store = np.concatenate([store, np.empty_like(store)])
+            store[len(rows)] = table_read(table, (cand - key) / T)
+            rows[key] = len(rows)
+        return rows[key]
 
     def model(delays):
-        return np.column_stack([column(d) for d in delays])
+        return np.column_stack([store[row(d)] for d in delays])
 
     def solve(delays):
         mat = model(delays)
         b, *_ = np.linalg.lstsq(mat, corr, rcond=None)
         return b, float(np.sum(np.abs(corr - mat @ b) ** 2))
 
+    def residual_energy(delays):
+        """‖corr − M b‖² at the least-squares b (the dichotomy's score), compiled: see
+        :func:`_ls_residual_energy`; ``lstsq`` when the columns are nearly collinear."""
+        index = np.array([row(d) for d in delays], dtype=np.int64)
+        energy = _ls_residual_energy(store, index, corr)
+        return energy if energy >= 0 else solve(delays)[1]
+
     def refine(delays, i, width):
         def score(x):
             trial = list(delays)
             trial[i] = x
-            return -solve(trial)[1]
+            return -residual_energy(trial)
 
         delays[i] = dichotomy_max(score, delays[i] - width, delays[i] + width, tol=1e-3 * T)
 
