@@ -102,7 +102,14 @@ def _dfe(x, sps, n_sym, train, n_train, n_ff, ff_centre, n_fb, use_rls, lam, mu,
     n = n_ff + n_fb
     w = np.zeros(n, dtype=np.complex128)
     w[ff_centre] = 1.0
-    P = np.eye(n, dtype=np.complex128) / delta
+    # P (Hermitian, n × n) as real and imaginary planes, updated with exactly the floating-point
+    # operations complex arithmetic does (bit-identical results), so that the loops vectorise
+    Pr = np.eye(n) / delta
+    Pim = np.zeros((n, n))
+    Pur = np.zeros(n)
+    Pui = np.zeros(n)
+    ur = np.zeros(n)
+    ui = np.zeros(n)
     u = np.zeros(n, dtype=np.complex128)
     Pu = np.zeros(n, dtype=np.complex128)
     g = np.zeros(n, dtype=np.complex128)
@@ -140,19 +147,48 @@ def _dfe(x, sps, n_sym, train, n_train, n_ff, ff_centre, n_fb, use_rls, lam, mu,
         e = d - z
         if use_rls:
             # P is Hermitian, so uᴴP = (Pu)ᴴ: one matrix-vector product, then a rank-one downdate in place
+            for i in range(n):
+                ur[i] = u[i].real
+                ui[i] = u[i].imag
+            # Pu = P u, two rows at a time (independent accumulators; each row summed in the same order)
+            i0 = 0
+            while i0 + 2 <= n:
+                sr0 = 0.0
+                si0 = 0.0
+                sr1 = 0.0
+                si1 = 0.0
+                for j in range(n):
+                    sr0 += Pr[i0, j] * ur[j] - Pim[i0, j] * ui[j]
+                    si0 += Pr[i0, j] * ui[j] + Pim[i0, j] * ur[j]
+                    sr1 += Pr[i0 + 1, j] * ur[j] - Pim[i0 + 1, j] * ui[j]
+                    si1 += Pr[i0 + 1, j] * ui[j] + Pim[i0 + 1, j] * ur[j]
+                Pur[i0] = sr0
+                Pui[i0] = si0
+                Pur[i0 + 1] = sr1
+                Pui[i0 + 1] = si1
+                i0 += 2
+            for i in range(i0, n):
+                sr = 0.0
+                si = 0.0
+                for j in range(n):
+                    sr += Pr[i, j] * ur[j] - Pim[i, j] * ui[j]
+                    si += Pr[i, j] * ui[j] + Pim[i, j] * ur[j]
+                Pur[i] = sr
+                Pui[i] = si
             denom = lam
             for i in range(n):
-                acc = 0.0j
-                for j in range(n):
-                    acc += P[i, j] * u[j]
-                Pu[i] = acc
-                denom += np.real(np.conj(u[i]) * acc)
+                Pu[i] = complex(Pur[i], Pui[i])
+                denom += np.real(np.conj(u[i]) * Pu[i])
             for i in range(n):
                 g[i] = Pu[i] / denom
                 w[i] += g[i] * np.conj(e)
             for i in range(n):
+                gr = g[i].real
+                gim = g[i].imag
                 for j in range(n):
-                    P[i, j] = (P[i, j] - g[i] * np.conj(Pu[j])) / lam
+                    # P[i, j] = (P[i, j] − g[i] conj(Pu[j])) / λ, part by part
+                    Pr[i, j] = (Pr[i, j] - (gr * Pur[j] + gim * Pui[j])) / lam
+                    Pim[i, j] = (Pim[i, j] - (gim * Pur[j] - gr * Pui[j])) / lam
         else:
             norm = 1e-9
             for i in range(n):
