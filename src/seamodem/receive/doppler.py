@@ -151,16 +151,43 @@ def matched_filter(
     x = r[n_lo:n_hi]
     if carrier_offset_hz:
         x = x * np.exp(-2j * np.pi * carrier_offset_hz * (t0_s + np.arange(n_lo, n_hi) / fs - t_ref_s))
-    # dense gather of each symbol's support (faster than a sparse matrix for one product)
+    # each symbol's support gathered densely (faster than a sparse matrix for one product), in one
+    # compiled pass: the same operations, in the same order, as the numpy form
+    #   idx = first_k + n, u = t0 + idx/fs − t_k, g = table(u/T)·[inside]/√T, y_k = Σ_n g·x[idx − n_lo]
+    # (bit-identical to it; tests/receive/test_kernels.py)
     width = int(math.ceil(2 * half * fs)) + 2
     first = np.ceil((tk - half - t0_s) * fs - 1e-9).astype(np.int64)
-    idx = first[:, None] + np.arange(width)[None, :]
-    u = t0_s + idx / fs - tk[:, None]
-    inside = (idx >= n_lo) & (idx < n_hi) & (np.abs(u) <= half)
-    g = _srrc_interp(u / T, float(config.rolloff), n_half) * (inside / math.sqrt(T))
-    samples = x[np.clip(idx - n_lo, 0, n_hi - n_lo - 1)]
+    table = _srrc_table(float(config.rolloff), n_half)
+    out = np.empty(tk.size, complex)
+    _matched_filter_kernel(np.ascontiguousarray(x, dtype=complex), n_lo, n_hi, first, width, float(t0_s),
+                           float(fs), np.ascontiguousarray(tk), float(T), float(half), table.values,
+                           float(table.half_extent), float(table.rate), 1.0 / math.sqrt(T), out)
     norm = np.sqrt(T / srrc_truncation_energy(float(config.rolloff), n_half)) / (fs * T)
-    return np.einsum("kn,kn->k", g, samples) * norm
+    return out * norm
+
+
+@njit(cache=True, nogil=True)
+def _matched_filter_kernel(x, n_lo, n_hi, first, width, t0_s, fs, tk, T, half, values, half_extent, rate,
+                           inv_sqrt_t, out):
+    last = values.size - 1
+    for k in range(tk.size):
+        acc_re = 0.0
+        acc_im = 0.0
+        for n in range(width):
+            idx = first[k] + n
+            u = t0_s + idx / fs - tk[k]
+            inside = idx >= n_lo and idx < n_hi and abs(u) <= half
+            pos = (u / T + half_extent) * rate
+            i = min(max(int(np.floor(pos)), 0), values.size - 2)
+            frac = pos - i
+            v = values[i] * (1.0 - frac) + values[i + 1] * frac
+            if not (pos >= 0 and pos <= last):
+                v = 0.0
+            g = v * (inv_sqrt_t if inside else 0.0)
+            s = x[min(max(idx - n_lo, 0), n_hi - n_lo - 1)]
+            acc_re += g * s.real
+            acc_im += g * s.imag
+        out[k] = complex(acc_re, acc_im)
 
 
 def _pilot_outputs(r, fs, t0_s, config: FrameConfig, t_start_s: float, eps: float) -> np.ndarray:
