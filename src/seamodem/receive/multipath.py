@@ -91,6 +91,15 @@ def _response_table(rolloff: float, rho: tuple, half_extent_symbols: int) -> Uni
     )
 
 
+@lru_cache(maxsize=8)
+def _pilot_template(config: FrameConfig, fs: float, pilot_bytes: bytes) -> tuple[np.ndarray, float]:
+    """:func:`~seamodem.receive.detect.pilot_template`, cached: a frame's arrival fit and its two
+    echo searches use the same Doppler, hence the same template (read-only)."""
+    template, tau_a = pilot_template(config, fs, np.frombuffer(pilot_bytes, dtype=complex))
+    template.flags.writeable = False
+    return template, tau_a
+
+
 @njit(cache=True, nogil=True)
 def _ls_residual_energy(store, index, corr):
     """min_b ‖corr − M b‖², M's real columns ``store[index]``, by the normal equations (Cholesky of MᵀM).
@@ -205,7 +214,7 @@ def fit_paths(
     rho = np.array([np.vdot(a[: n_p - abs(d)], a[abs(d) :]).real for d in lags])  # real ±1 pilot: symmetric
     # the received pilot is compressed by 1 + ε: a template at frame times τ_a + i(1 + ε)/fs
     # lies on the recording's grid; uncompressed, the fit would be τ_centroid·ε early (33 µs at 3 m/s)
-    template, tau_a = pilot_template(config, fs / (1 + eps), a)
+    template, tau_a = _pilot_template(config, fs / (1 + eps), a.tobytes())
     tau_a /= 1 + eps
     T /= 1 + eps
     n_t = len(template)
