@@ -13,12 +13,14 @@ from scipy.optimize import least_squares, minimize
 
 from seamodem.errors import ConfigError
 from seamodem.navigation.ekf import kalman_update
+from seamodem.navigation.bearing import bearing_body, wrap_angle
 from seamodem.navigation.inertial import (
     InertialConfig,
     _acoustic_model,
     _motion,
     _update_acoustic,
     _update_heading,
+    add_bearings,
     add_fixes,
     build_nodes,
     chart_nees,
@@ -190,8 +192,10 @@ def test_fixed_lag_limits_are_the_filter_and_the_rts_smoother():
         fixed_lag_smooth(run, lag_s=0.0)
 
 
-def test_batch_smoother_is_the_least_squares_solution():
-    """Gauss–Newton fixed point = the minimum of the stacked residuals, solved independently by scipy."""
+@pytest.mark.parametrize("with_bearing", [False, True], ids=["range_vr", "range_vr_bearing"])
+def test_batch_smoother_is_the_least_squares_solution(with_bearing):
+    """Gauss–Newton fixed point = the minimum of the stacked residuals, solved independently by scipy; with a
+    hydrophone array's body azimuth per frame, its rows from ``bearing.bearing_body`` (written separately)."""
     rng = np.random.default_rng(5)
     cfg = InertialConfig(position_rw=0.05, gate_probability=None)
     n, N, dt = cfg.n_states, 41, 0.25
@@ -212,8 +216,12 @@ def test_batch_smoother_is_the_least_squares_solution():
     vr = -(u[:, 0] * v[frames] * np.cos(psi[frames]) + u[:, 1] * v[frames] * np.sin(psi[frames]))
     vr += 0.01 * rng.normal(size=frames.size)
     nodes = build_nodes(t, heading, omega, accel, t[frames], rng_m, vr, 1e-4, 1e-4, heading_var=1e-4)
+    if with_bearing:
+        az = bearing_body(xy[frames, 0], xy[frames, 1], psi[frames], beacon) + 0.01 * rng.normal(size=frames.size)
+        nodes = add_bearings(nodes, az, 0.01)
     z0, P0 = cfg.initial(0.0, 0.0, heading[0], 1.0)
     run = run_filter(nodes, cfg, beacon_xy=beacon, z0=z0, P0=P0)
+    assert np.count_nonzero(run.bearing_status == 1) == (frames.size if with_bearing else 0)
     sm = batch_smooth(run, max_iterations=30, tol=1e-12, position_rw=None)  # the filter's model
     Q = cfg.process_density * dt
     L0 = np.linalg.cholesky(np.linalg.inv(P0))
@@ -233,6 +241,8 @@ def test_batch_smoother_is_the_least_squares_solution():
                 h, H = np.empty(2), np.zeros((2, n))
                 _acoustic_model(Z[k], lay, beacon, True, True, h, H)
                 r.append((nodes.meas[k] - h) / 1e-2)
+            if nodes.has_bearing[k]:
+                r.append([wrap_angle(nodes.bearing[k] - bearing_body(Z[k, 0], Z[k, 1], Z[k, 2], beacon)) / 1e-2])
         return np.concatenate([np.atleast_1d(np.asarray(x, dtype=float)) for x in r])
 
     ref = least_squares(residuals, run.states.ravel(), xtol=1e-14, ftol=1e-14, gtol=1e-14).x.reshape(N, n)

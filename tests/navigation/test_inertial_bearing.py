@@ -1,29 +1,24 @@
 """The beacon's body-frame azimuth (a hydrophone array, issue 17) in the inertial filter and its smoothers.
 
 Independent references: :mod:`seamodem.navigation.bearing` (the receiver side's measurement model and its
-analytic Jacobian, written separately), a numerical derivative, the textbook scalar Kalman update, a direct
-least-squares solve of the batch problem with the bearing rows, and the in-loop mission kernel against a
-re-run over its recorded sensors.
+analytic Jacobian, written separately), a numerical derivative, the textbook scalar Kalman update, and the
+in-loop mission kernel against a re-run over its recorded sensors. The batch smoother's bearing rows against
+scipy's least squares: ``test_inertial.py::test_batch_smoother_is_the_least_squares_solution``.
 """
 
 from dataclasses import replace
 
 import numpy as np
 import pytest
-from scipy.optimize import least_squares
 
 from seamodem.navigation.bearing import bearing_body, bearing_jacobian, wrap_angle
 from seamodem.navigation.inertial import (
     InertialConfig,
-    _acoustic_model,
-    _motion,
     _update_bearing,
     add_bearings,
     build_nodes,
-    run_filter,
 )
 from seamodem.navigation.montecarlo import MissionConfig, NoiseModel, mission_noise, simulate_inertial_mission
-from seamodem.navigation.smoothing import batch_smooth
 
 BEACON = np.array([50.0, 100.0])
 CART = InertialConfig(coordinates="cartesian", estimate_bias_drift=True)
@@ -85,57 +80,6 @@ def test_bearing_innovation_wraps_and_the_gate_rejects_a_flipped_bearing():
     zz, PP = z.copy(), P.copy()
     nis, used = _update_bearing(zz, PP, POLAR.layout, BEACON, z.copy(), h0 + np.pi, 1e-4, 6.63, False, np.empty(6))
     assert not used and nis > 1e3 and np.array_equal(zz, z)  # a front/back flip is gated, state untouched
-
-
-def test_batch_smoother_with_bearings_is_the_least_squares_solution():
-    rng = np.random.default_rng(7)
-    cfg = InertialConfig(position_rw=0.05, gate_probability=None)
-    n, N, dt = cfg.n_states, 41, 0.25
-    t = np.arange(N) * dt
-    psi, v = 0.3 + 0.05 * t, 1.0 + 0.02 * t
-    xy = np.zeros((N, 2))
-    for k in range(1, N):
-        xy[k] = xy[k - 1] + v[k - 1] * dt * np.array([np.cos(psi[k - 1]), np.sin(psi[k - 1])])
-    omega = np.r_[0.0, np.diff(psi) / dt] + 0.01 * rng.normal(size=N)
-    accel = np.r_[0.0, np.diff(v) / dt] + 0.01 * rng.normal(size=N)
-    heading = psi + 0.02 + 0.01 * rng.normal(size=N)
-    frames = np.arange(0, N, 8)[1:]
-    beacon = np.array([30.0, 40.0])
-    d = np.hypot(*(xy[frames] - beacon).T)
-    u = (xy[frames] - beacon) / d[:, None]
-    vr = -(u[:, 0] * v[frames] * np.cos(psi[frames]) + u[:, 1] * v[frames] * np.sin(psi[frames]))
-    az = bearing_body(xy[frames, 0], xy[frames, 1], psi[frames], beacon) + 0.01 * rng.normal(size=frames.size)
-    nodes = build_nodes(t, heading, omega, accel, t[frames], d + 0.01 * rng.normal(size=frames.size),
-                        vr + 0.01 * rng.normal(size=frames.size), 1e-4, 1e-4, heading_var=1e-4)
-    nodes = add_bearings(nodes, az, 0.01)
-    z0, P0 = cfg.initial(0.0, 0.0, heading[0], 1.0)
-    run = run_filter(nodes, cfg, beacon_xy=beacon, z0=z0, P0=P0)
-    assert np.count_nonzero(run.bearing_status == 1) == frames.size
-    sm = batch_smooth(run, max_iterations=30, tol=1e-12, position_rw=None)  # the filter's model
-    Q = cfg.process_density * dt
-    L0 = np.linalg.cholesky(np.linalg.inv(P0))
-    lay = replace(cfg, coordinates="cartesian").layout
-
-    def residuals(flat):
-        Z = flat.reshape(N, n)
-        r = [L0.T @ (Z[0] - z0)]
-        for k in range(1, N):
-            f, F = np.empty(n), np.empty((n, n))
-            _motion(Z[k - 1], lay, omega[k], accel[k], dt, f, F)
-            r.append((Z[k] - f) / np.sqrt(Q))
-            if run.has_heading[k]:
-                r.append([(heading[k] - Z[k, 2] - Z[k, 4]) / 1e-2])
-            if nodes.has_acoustic[k]:
-                h, H = np.empty(2), np.zeros((2, n))
-                _acoustic_model(Z[k], lay, beacon, True, True, h, H)
-                r.append((nodes.meas[k] - h) / 1e-2)
-            if nodes.has_bearing[k]:
-                r.append([wrap_angle(nodes.bearing[k] - bearing_body(Z[k, 0], Z[k, 1], Z[k, 2], beacon)) / 1e-2])
-        return np.concatenate([np.atleast_1d(np.asarray(x, dtype=float)) for x in r])
-
-    ref = least_squares(residuals, run.states.ravel(), xtol=1e-14, ftol=1e-14, gtol=1e-14).x.reshape(N, n)
-    assert sm.converged
-    assert np.abs(sm.states - ref).max() < 1e-6
 
 
 def test_add_bearings_skips_frames_without_one():

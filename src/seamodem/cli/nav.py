@@ -270,7 +270,7 @@ def run_track(args: argparse.Namespace) -> int:
             sigma_range_m=args.sigma_range,
             sigma_v_r_mps=args.sigma_vr,
             use_bearing=not args.no_bearing,
-            bearing_floor_rad=math.radians(args.bearing_floor) if math.isfinite(args.bearing_floor) else math.nan,
+            bearing_floor_rad=math.radians(args.bearing_floor),  # NaN and inf stay so: run_track refuses them
             truth=args.truth,
             command=command_line(),
             output=args.output,

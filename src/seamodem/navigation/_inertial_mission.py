@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 from .imu import bias_step, imu_reading
-from .inertial import _cartesian, _gated_acoustic, _predict, _to_internal, _update_bearing, _update_heading
+from .inertial import _cartesian, _gated_acoustic, _gated_bearing, _predict, _to_internal, _update_heading, _wrap
 from .vehicle import feedback_command, vehicle_step
 
 
@@ -107,12 +107,10 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         _update_heading(z, P, head_m, heading_var, ph)
         if bearing_sigma > 0 and k % com_every == 0:
             # after the heading update, as filter_nodes orders a node's measurements
-            az = np.arctan2(beacon[1] - y, beacon[0] - x) - psi + bearing_sigma * noise[k - 1, 5]
-            az = (az + np.pi) % (2 * np.pi) - np.pi
+            az = _wrap(np.arctan2(beacon[1] - y, beacon[0] - x) - psi + bearing_sigma * noise[k - 1, 5])
             sensors[k, 5] = az
-            _, used = _update_bearing(z, P, lay, beacon, z.copy(), az, bearing_sigma * bearing_sigma, gate_bearing,
-                                      bearing_gated >= gate_reset_after, ph)
-            bearing_gated = 0 if used else bearing_gated + 1
+            _, _, bearing_gated = _gated_bearing(z, P, lay, beacon, az, bearing_sigma * bearing_sigma, gate_bearing,
+                                                 gate_reset_after, bearing_gated, ph)
         ex, ey = _cartesian(z, lay, beacon)
         estimate[k, 0], estimate[k, 1] = ex, ey
         truth[k, 0], truth[k, 1] = x, y

@@ -710,6 +710,17 @@ def _gated_acoustic(z, P, lay, beacon, meas, var, use_range, use_vr, gate, gate_
 
 
 @njit(cache=True, nogil=True)
+def _gated_bearing(z, P, lay, beacon, azimuth, var, gate, gate_reset_after, gated_run, ph):
+    """The bearing update with the gate's bookkeeping, as :func:`_gated_acoustic`: (NIS, status, bearings
+    gated in a row after this one); status 1 used, 2 gated, 3 used although above the gate."""
+    force = gated_run >= gate_reset_after
+    nis, used = _update_bearing(z, P, lay, beacon, z.copy(), azimuth, var, gate, force, ph)
+    if not used:
+        return nis, 2, gated_run + 1
+    return nis, (3 if nis > gate else 1), 0
+
+
+@njit(cache=True, nogil=True)
 def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var, has_acoustic,
                  meas, meas_var, use_range, use_vr, gate, gate_reset_after, iterations, second_order, has_fix, fix,
                  fix_var, has_bearing, bearing, bearing_var, gate_bearing, history):
@@ -777,11 +788,8 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
         if has_heading[i]:
             _update_heading(z, P, heading[i], heading_var[i], ph)
         if has_bearing[i]:
-            force = bearing_gated >= gate_reset_after
-            bearing_nis[i], used = _update_bearing(z, P, lay, beacon, z.copy(), bearing[i], bearing_var[i],
-                                                   gate_bearing, force, ph)
-            bearing_status[i] = (3 if bearing_nis[i] > gate_bearing else 1) if used else 2
-            bearing_gated = 0 if used else bearing_gated + 1
+            bearing_nis[i], bearing_status[i], bearing_gated = _gated_bearing(
+                z, P, lay, beacon, bearing[i], bearing_var[i], gate_bearing, gate_reset_after, bearing_gated, ph)
         if has_fix[i]:
             _update_position(z, P, lay, beacon, z.copy(), fix[i], fix_var[i], ph)
         for a in range(n):
