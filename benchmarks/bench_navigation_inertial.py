@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from seamodem.navigation.bearing import wrap_angle
 from seamodem.navigation.inertial import chart_nees
 from seamodem.navigation.montecarlo import (
     PAPER_TABLE,
@@ -93,7 +94,7 @@ def _polar_nees(states, covs, truth, beacon):
     rho = np.hypot(d[:, 0], d[:, 1])
     dt = truth - beacon
     e = np.stack([rho - np.hypot(dt[:, 0], dt[:, 1]),
-                  np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - np.arctan2(dt[:, 1], dt[:, 0]))))], axis=1)
+                  wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - np.arctan2(dt[:, 1], dt[:, 0]))], axis=1)
     J = np.zeros((len(rho), 2, 2))  # ∂(ρ, β)/∂(x, y)
     J[:, 0, 0], J[:, 0, 1] = d[:, 0] / rho, d[:, 1] / rho
     J[:, 1, 0], J[:, 1, 1] = -d[:, 1] / rho**2, d[:, 0] / rho**2
