@@ -125,3 +125,34 @@ def test_rls_dfe_kernel_is_the_complex_arithmetic_form_bit_for_bit():
     soft_ref, w_ref = _dfe_reference(x, 2, n_sym, symbols[:n_train], n_ff, ff_centre, n_fb, lam, delta, points)
     assert np.array_equal(soft, soft_ref)
     assert np.array_equal(w, w_ref)
+
+
+def test_whole_frame_interpolation_kernels_are_the_lagrange_forms():
+    """The whole-frame fit's read (filter outputs and their derivative at the symbol instants) and spread
+    (synthesis) kernels against the numpy forms they replaced: gather × Lagrange weights, and bincount."""
+    from seamodem.receive.wholeframe import _BASIS, _TAPS, _lagrange, _read_kernel, _spread_kernel
+
+    rng = np.random.default_rng(5)
+    big = 4000
+    c = rng.standard_normal(big) + 1j * rng.standard_normal(big)
+    pos = np.concatenate([rng.uniform(0, big, 500), [0.0, 1.0, big - 3.5, 2.999999]])  # wrap at both ends
+    x = rng.standard_normal(pos.size) + 1j * rng.standard_normal(pos.size)
+    i0, w = _lagrange(pos)
+    _, dw = _lagrange(pos, derivative=True)
+    idx = (i0[:, None] + _TAPS[None, :]) % big
+    y, dy = np.empty(pos.size, complex), np.empty(pos.size, complex)
+    _read_kernel(c, pos, _BASIS, int(_TAPS[0]), y, dy)
+    scale = np.max(np.abs(c))
+    assert np.max(np.abs(y - np.einsum("kj,kj->k", c[idx], w))) < 1e-13 * scale
+    assert np.max(np.abs(dy - np.einsum("kj,kj->k", c[idx], dw))) < 1e-13 * scale
+    grid = np.zeros(big, complex)
+    _spread_kernel(x, pos, _BASIS, int(_TAPS[0]), grid)
+    spread = (w * x[:, None]).ravel()
+    want = np.bincount(idx.ravel(), spread.real, big) + 1j * np.bincount(idx.ravel(), spread.imag, big)
+    assert np.max(np.abs(grid - want)) < 1e-13 * np.max(np.abs(x))
+    # the Lagrange weights interpolate: a cubic on the grid is read exactly, and its derivative too
+    t = np.arange(big) / big
+    _read_kernel((t**3 - 2 * t).astype(complex), pos[:500] * 0.5 + 10, _BASIS, int(_TAPS[0]), y[:500], dy[:500])
+    u = (pos[:500] * 0.5 + 10) / big
+    assert np.allclose(y[:500].real, u**3 - 2 * u, atol=1e-12)
+    assert np.allclose(dy[:500].real * big, 3 * u**2 - 2, atol=1e-9)

@@ -40,6 +40,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..config import FrameConfig
 from .bounds import gabor_bandwidth_hz
@@ -158,6 +159,51 @@ def _lagrange(pos: np.ndarray, derivative: bool = False) -> tuple[np.ndarray, np
     return i, powers @ _BASIS
 
 
+@njit(cache=True, nogil=True)
+def _read_kernel(c, pos, basis, first_tap, y, dy):
+    """y_k = Σ_j c[(i_k + o_j) mod N] w_j(d_k) and dy_k with the derivative's weights (``_lagrange``'s
+    weights, Horner-free: the powers of d times the basis, as the numpy form), in one pass."""
+    n_taps = basis.shape[1]
+    big = c.size
+    for k in range(pos.size):
+        i = int(np.floor(pos[k]))
+        d = pos[k] - i
+        acc = 0j
+        dacc = 0j
+        for j in range(n_taps):
+            w = 0.0
+            dw = 0.0
+            p = 1.0
+            for q in range(n_taps):
+                w += p * basis[q, j]
+                if q + 1 < n_taps:
+                    dw += (q + 1) * p * basis[q + 1, j]
+                p *= d
+            v = c[(i + first_tap + j) % big]
+            acc += w * v
+            dacc += dw * v
+        y[k] = acc
+        dy[k] = dacc
+
+
+@njit(cache=True, nogil=True)
+def _spread_kernel(x, pos, basis, first_tap, grid):
+    """grid[(i_k + o_j) mod N] += w_j(d_k)·x_k: the transpose of :func:`_read_kernel` (the symbols spread
+    onto the upsampled grid), in one pass."""
+    n_taps = basis.shape[1]
+    big = grid.size
+    for k in range(pos.size):
+        i = int(np.floor(pos[k]))
+        d = pos[k] - i
+        for j in range(n_taps):
+            w = 0.0
+            p = 1.0
+            for q in range(n_taps):
+                w += p * basis[q, j]
+                p *= d
+            grid[(i + first_tap + j) % big] += w * x[k]
+
+
 class _Segment:
     """FFT-domain SRRC matched filter and synthesis on one stretch of baseband.
 
@@ -196,10 +242,6 @@ class _Segment:
         period = self.config.symbol_period_s / scale
         return period, _srrc_spectrum(self.band_hz, period, float(self.config.rolloff))
 
-    def _grid(self, instants_s: np.ndarray):
-        i0, w = _lagrange((instants_s - self.t0_s) * self.fs * _UPSAMPLE)
-        return (i0[:, None] + _TAPS[None, :]) % self.big, w
-
     def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float,
                derivative: bool = False):
         """Matched-filter outputs at ``instants_s`` of r with ``offset_hz`` (phase 0 at ``t_ref_s``) removed;
@@ -209,21 +251,19 @@ class _Segment:
         up = np.zeros(self.big, complex)
         up[self.band_big] = self._fft.fft(x, self.m)[self.band] * h
         c = self._fft.ifft(up) * (_UPSAMPLE / math.sqrt(period))
-        idx, w = self._grid(instants_s)
-        values = c[idx]
-        y = np.einsum("kj,kj->k", values, w)
+        pos = np.ascontiguousarray((instants_s - self.t0_s) * (self.fs * _UPSAMPLE), dtype=float)
+        y, dy = np.empty(pos.size, complex), np.empty(pos.size, complex)
+        _read_kernel(c, pos, _BASIS, int(_TAPS[0]), y, dy)
         if not derivative:
             return y
-        _, dw = _lagrange((instants_s - self.t0_s) * self.fs * _UPSAMPLE, derivative=True)
-        return y, np.einsum("kj,kj->k", values, dw) * (self.fs * _UPSAMPLE)
+        return y, dy * (self.fs * _UPSAMPLE)
 
     def synthesize(self, symbols: np.ndarray, instants_s: np.ndarray, *, scale: float) -> np.ndarray:
         """Σ x_k √T' h(t_n − t_k) on the segment's grid, without the carrier phase."""
         period, h = self._pulse(scale)
-        idx, w = self._grid(instants_s)
-        spread = (w * symbols[:, None]).ravel()
-        flat = idx.ravel()
-        grid = np.bincount(flat, spread.real, self.big) + 1j * np.bincount(flat, spread.imag, self.big)
+        pos = np.ascontiguousarray((instants_s - self.t0_s) * (self.fs * _UPSAMPLE), dtype=float)
+        grid = np.zeros(self.big, complex)
+        _spread_kernel(np.ascontiguousarray(symbols, dtype=complex), pos, _BASIS, int(_TAPS[0]), grid)
         spec = np.zeros(self.m, complex)
         spec[self.band] = self._fft.fft(grid)[self.band_big] * h
         return (self.fs * math.sqrt(period)) * self._fft.ifft(spec)[: self.n]
@@ -325,12 +365,12 @@ def fit_whole_frame(
         phi = np.unwrap(np.angle(zs))
         w = np.abs(zs) ** 2 / counts  # ∝ segment SNR: phase variance 1/(2·SNR)
         design = np.column_stack([np.ones(n_segments), ts, ts**2])
-        sw = np.sqrt(w)
-        coef, *_ = np.linalg.lstsq(design * sw[:, None], phi * sw, rcond=None)
+        # the normal equations (3 × 3, times within ±D/2: well conditioned), their inverse the covariance's shape
+        g_inv = np.linalg.inv(design.T @ (design * w[:, None]))
+        coef = g_inv @ (design.T @ (w * phi))
         resid = phi - design @ coef
         s2 = float(np.sum(w * resid**2) / (n_segments - 3))
-        cov = s2 * np.linalg.inv(design.T @ (design * w[:, None]))
-        return coef, math.sqrt(max(cov[1, 1], 0.0))
+        return coef, math.sqrt(max(s2 * g_inv[1, 1], 0.0))
 
     sigma_b = np.full(n_paths, math.inf)
     sigma_d = np.full(n_paths, math.inf)
