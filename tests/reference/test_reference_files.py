@@ -143,6 +143,13 @@ def test_tx_then_rx_with_pre_and_postamble(tmp_path, capsys):
     np.testing.assert_allclose(table["tof_s"], 0.0, atol=2e-6)  # no channel: heard as emitted
     assert np.all(np.abs(table["v_r_pair_mps"]) < 3 * table["sigma_v_r_pair_mps"] + 1e-9)
     assert np.all(table["sigma_v_r_pair_mps"] < 1e-3)
+    # a constant speed stated: the Doppler from the spacing alone, its σ the ridge spacing's (no Doppler-change term)
+    out0 = tmp_path / "m0.jsonl"
+    assert main(["rx", str(wav), "--reference", str(wav.with_suffix(".json")), "--max-accel", "0", "-o", str(out0), "-q"]) == 0
+    table0 = pd.read_json(out0, lines=True)
+    assert json.loads(out0.with_name(out0.name + ".json").read_text())["max_accel_mps2"] == 0.0
+    assert np.all(np.abs(table0["v_r_pair_mps"]) < 3 * table0["sigma_v_r_pair_mps"] + 1e-9)
+    assert np.all(table0["sigma_v_r_pair_mps"] < table["sigma_v_r_pair_mps"])
 
 
 def test_option_errors(tmp_path, capsys):
@@ -152,12 +159,30 @@ def test_option_errors(tmp_path, capsys):
         (["--mat-variable", "x"], "is not a .mat file"),
         (["--channel", "0", "--all-channels"], "not both"),
         (["--v-max", "-1"], "v-max"),
+        (["--max-accel", "-0.1"], "max-accel"),
+        (["--max-accel", "nan"], "max-accel"),
     ]:
         code, out = _rx(tmp_path, wav, *extra)
         err = capsys.readouterr().err
         assert code == 2 and message in err and len(err.strip().splitlines()) == 1
     code = main(["rx", str(wav), "--all-channels", "--emit-start", "0", "--emit-period", "1", "-o", str(tmp_path / "o.csv")])
     assert code == 2 and "only with --reference" in capsys.readouterr().err
+    code = main(["rx", str(wav), "--max-accel", "0", "--emit-start", "0", "--emit-period", "1", "-o", str(tmp_path / "o.csv")])
+    assert code == 2 and "max-accel: only with --reference" in capsys.readouterr().err
+
+
+def test_without_emission_times_every_detection_is_written(tmp_path, capsys):
+    """No sidecar, no --emit-start: the records (the receiver's writer) keep arrival and Doppler, range empty."""
+    wav = tmp_path / "r.wav"
+    soundfile.write(wav, _signal(96000.0), 96000, subtype="FLOAT")
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(wav), "--reference", SPEC, "-o", str(out), "-q"]) == 0
+    assert "emission times unknown" in capsys.readouterr().err
+    table = pd.read_csv(out)
+    np.testing.assert_allclose(table["t_arrival_s"], ARRIVALS, atol=1e-5)
+    assert list(table["frame_index"]) == [-1] * 3 and table["range_m"].isna().all()
+    meta = json.loads(out.with_name(out.name + ".json").read_text())
+    assert meta["rows"] == 3 and meta["columns"] == list(table.columns) and meta["max_accel_mps2"] == 0.3
 
 
 def test_channel_simulates_a_reference_schedule(tmp_path, capsys):

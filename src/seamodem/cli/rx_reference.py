@@ -8,7 +8,6 @@ receiver. Heavy imports stay inside the functions (fast command line).
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import sys
@@ -46,13 +45,21 @@ def add_reference_options(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="search every channel and keep, per detection, the channel with the highest E/N0",
     )
+    g.add_argument(
+        "--max-accel",
+        type=float,
+        default=None,
+        metavar="MPS2",
+        help="pre/postamble pairs: largest radial acceleration over a packet (default 0.3 m/s²); "
+        "0 states a constant speed: the Doppler from the spacing alone, ~10x more precise",
+    )
     frames_run = p.get_default("run")
 
     def run(args: argparse.Namespace) -> int:
         if args.reference:
             return run_reference(args)
-        for name in ("mat_variable", "sample_rate", "all_channels"):
-            if getattr(args, name):
+        for name in ("mat_variable", "sample_rate", "all_channels", "max_accel"):
+            if getattr(args, name) is not None and getattr(args, name) is not False:  # 0 is a value given
                 raise SeamodemError(f"{name.replace('_', '-')}: only with --reference (frame recordings are read as audio files)")
         return frames_run(args)
 
@@ -90,38 +97,17 @@ def _own_sidecar(recording: Path) -> dict | None:
 
 
 def write_reference_records(path: Path, records: list, metadata: dict) -> int:
-    """Plain CSV (one header row) or JSON Lines of the records, metadata in the sidecar ``PATH.json``.
+    """The receiver's :func:`~seamodem.receive.records.write_measurements` with the reference columns.
 
-    Files appear together or not at all. Columns: every
-    :class:`~seamodem.receive.records.MeasurementRecord` column, then the
-    reference's own (:data:`~seamodem.receive.reference.REFERENCE_FIELDS`).
+    Plain CSV (one header row) or JSON Lines, metadata in the sidecar ``PATH.json``; files appear together
+    or not at all. Columns: every :class:`~seamodem.receive.records.MeasurementRecord` column, then the
+    reference's own (:data:`~seamodem.receive.reference.REFERENCE_FIELDS`). Detections without an
+    emission (times unknown) are written too, their range empty.
     """
-    from ..io.files import atomic_outputs
-    from ..receive.records import MEASUREMENT_FORMAT
+    from ..receive.records import write_measurements
     from ..receive.reference import REFERENCE_FIELDS
 
-    def value(v, csv_: bool):
-        if isinstance(v, bool) or v is None:
-            return ("" if v is None else int(v)) if csv_ else v
-        if isinstance(v, float):
-            return repr(v) if csv_ else (v if math.isfinite(v) else None)
-        return v
-
-    sidecar = path.with_name(path.name + ".json")
-    with atomic_outputs(path, sidecar) as (tmp, tmp_side):
-        with tmp.open("w", encoding="utf-8", newline="") as f:
-            if path.suffix.lower() == ".csv":
-                w = csv.DictWriter(f, fieldnames=REFERENCE_FIELDS)
-                w.writeheader()
-                for rec in records:
-                    w.writerow({k: value(v, True) for k, v in rec.to_dict().items()})
-            else:
-                for rec in records:
-                    f.write(json.dumps({k: value(v, False) for k, v in rec.to_dict().items()}) + "\n")
-        meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **metadata, "columns": list(REFERENCE_FIELDS),
-                "rows": len(records)}
-        tmp_side.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
-    return len(records)
+    return write_measurements(path, records, metadata, fields=REFERENCE_FIELDS, keep_unmatched=True)
 
 
 def run_reference(args: argparse.Namespace) -> int:
@@ -140,6 +126,8 @@ def run_reference(args: argparse.Namespace) -> int:
         raise SeamodemError(f"v-max: must be in (0, 100) m/s, got {args.v_max!r}")
     if not (math.isfinite(args.false_alarms_per_hour) and args.false_alarms_per_hour > 0):
         raise SeamodemError(f"false-alarms-per-hour: must be > 0, got {args.false_alarms_per_hour!r}")
+    if args.max_accel is not None and not (math.isfinite(args.max_accel) and 0 <= args.max_accel < 100):
+        raise SeamodemError(f"max-accel: must be in [0, 100) m/s², got {args.max_accel!r}")
     if args.all_channels and args.channel is not None:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
     recording = Path(args.recording[0])
@@ -162,7 +150,14 @@ def run_reference(args: argparse.Namespace) -> int:
         raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
     emissions = _emissions(args, sidecar, references)
 
-    from ..receive.reference import ReferenceReceiver, best_per_detection, keep_matching_reference, pair_up, to_record
+    from ..receive.reference import (
+        MAX_ACCEL_MPS2,
+        ReferenceReceiver,
+        best_per_detection,
+        keep_matching_reference,
+        pair_up,
+        to_record,
+    )
     from ..transmit.reference import reference_replica
 
     replicas = [reference_replica(r) for r in references]
@@ -182,7 +177,8 @@ def run_reference(args: argparse.Namespace) -> int:
         f.clipped = source.clips.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
     found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
     found = keep_matching_reference(found)
-    pair_up(found, eps_max=args.v_max / sound_speed, sound_speed_mps=sound_speed)
+    max_accel = MAX_ACCEL_MPS2 if args.max_accel is None else args.max_accel
+    pair_up(found, eps_max=args.v_max / sound_speed, sound_speed_mps=sound_speed, max_accel_mps2=max_accel)
     records = [
         to_record(f, emissions[f.reference.name], sound_speed_mps=sound_speed, clock_offset_s=args.clock_offset)
         for f in found
@@ -196,6 +192,7 @@ def run_reference(args: argparse.Namespace) -> int:
         "clock_offset_s": args.clock_offset,
         "v_max_mps": args.v_max,
         "false_alarms_per_hour": args.false_alarms_per_hour,
+        "max_accel_mps2": max_accel,
         "references": [r.to_dict() for r in receiver.references],
         "front_end": {"centre_hz": receiver.plan.centre_hz, "baseband_rate_hz": receiver.plan.fs_bb,
                       "decimation": receiver.plan.decimation},

@@ -26,7 +26,7 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, NamedTuple
+from typing import Any, Iterable, NamedTuple, Sequence
 
 from ..errors import InputFileError, SeamodemError
 from ..io.files import atomic_outputs
@@ -233,7 +233,8 @@ def _csv_row(rec: MeasurementRecord) -> dict[str, Any]:
 
 
 def write_measurements(
-    path: str | Path, records: Iterable[MeasurementRecord], header: dict[str, Any], *, kind: str | None = None
+    path: str | Path, records: Iterable[MeasurementRecord], header: dict[str, Any], *, kind: str | None = None,
+    fields: Sequence[str] = FIELDS, keep_unmatched: bool = False,
 ) -> int:
     """Write the records to ``path`` (.csv or .jsonl) as they come, the metadata to its sidecar; returns how many.
 
@@ -250,6 +251,12 @@ def write_measurements(
         ``rows`` added.
     kind : {"csv", "jsonl"}, optional
         File format; default from the suffix of ``path``.
+    fields : sequence of str
+        Columns, in order: :data:`FIELDS`, or those of a record subclass
+        (e.g. :data:`seamodem.receive.reference.REFERENCE_FIELDS`).
+    keep_unmatched : bool
+        Write arrivals without an emission too (their range empty), as
+        ``rx --reference`` does when emission times are unknown.
 
     Notes
     -----
@@ -273,10 +280,10 @@ def write_measurements(
         with tmp.open("w", encoding="utf-8", newline="") as f:
             writer = None
             if kind == "csv":
-                writer = csv.DictWriter(f, fieldnames=FIELDS)
+                writer = csv.DictWriter(f, fieldnames=fields)
                 writer.writeheader()
             for rec in records:
-                if not is_matched(rec):
+                if not keep_unmatched and not is_matched(rec):
                     unmatched.append(rec.t_arrival_s)
                     continue
                 if writer is not None:
@@ -285,7 +292,7 @@ def write_measurements(
                     f.write(json.dumps({k: _json_value(v) for k, v in rec.to_dict().items()}) + "\n")
                 f.flush()
                 n += 1
-        meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **header, "columns": list(FIELDS), "rows": n,
+        meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **header, "columns": list(fields), "rows": n,
                 "unmatched_arrivals_s": unmatched}
         tmp_sidecar.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return n
