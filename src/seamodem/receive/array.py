@@ -714,6 +714,8 @@ def combine_channels(
 
 #: frames are combined over [t_a − PAD, t_a + T_F/(1 + v/c) + PAD], joined to the reference channel by ramps
 COMBINE_PAD_S, COMBINE_RAMP_S = 0.08, 0.01
+#: the reference channel goes through the impulse blanker in blocks of this many samples
+BLANKER_BLOCK = 1 << 16
 #: the combined detector scans the basebands in chunks of this length [s] (bounded memory)
 DETECTION_CHUNK_S = 10.0
 
@@ -839,8 +841,10 @@ class ArrayDetector:
             corr[i] = scipy.fft.ifft(spectrum * np.roll(pilot, m)[None, :], axis=-1, overwrite_x=True)[:, :n_out]
             np.abs(corr[i], out=power[i])
         power *= power
-        noise = np.median(power[:, :, ::4].transpose(1, 0, 2).reshape(K, -1), axis=1) / math.log(2)
-        noise = np.maximum(noise, 1e-6 * np.max(power, axis=(0, 2)))  # a noiseless recording keeps Z finite
+        sample = power[:, :, ::4].transpose(1, 0, 2).reshape(K, -1)  # every 4th lag, as the single detector
+        # a noiseless recording keeps Z finite (the floor from the sampled lags: a full pass over power
+        # cost a third of the statistics)
+        noise = np.maximum(np.median(sample, axis=1) / math.log(2), 1e-6 * np.max(sample, axis=1))
         zb = np.einsum("bkj,k->bj", power, (1.0 / np.maximum(noise, np.finfo(np.float32).tiny)).astype(np.float32))
         best = np.argmax(zb, axis=0)
         lag = np.arange(n_out)
@@ -926,6 +930,19 @@ def _splice(y: np.ndarray, channels: np.ndarray, fs: float, centre_hz: float, t_
     y[i0:i1] = ramp * beam + np.sqrt(1.0 - ramp**2) * y[i0:i1]
 
 
+def _blanked_stretches(x: np.ndarray, blanked_reference: np.ndarray, reference_channel: int,
+                       spread_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """[start, stop) sample spans of the reference channel's blanked samples widened by ``spread_samples``."""
+    hit = np.flatnonzero((blanked_reference == 0.0) & (x[:, reference_channel] != 0.0))
+    if not hit.size:
+        return hit, hit
+    s = max(int(spread_samples), 0)
+    new_run = np.flatnonzero(np.diff(hit) > 2 * s + 1) + 1  # widened stretches that do not touch the previous one
+    starts = np.maximum(hit[np.concatenate([[0], new_run])] - s, 0)
+    stops = np.minimum(hit[np.concatenate([new_run - 1, [hit.size - 1]])] + s + 1, x.shape[0])
+    return starts, stops
+
+
 def blank_like_reference(x: np.ndarray, blanked_reference: np.ndarray, reference_channel: int,
                          spread_samples: int) -> np.ndarray:
     """x with every channel zeroed where the reference channel was blanked, widened by ``spread_samples``.
@@ -934,14 +951,13 @@ def blank_like_reference(x: np.ndarray, blanked_reference: np.ndarray, reference
     other (5 samples for 8 cm at 96 kHz): the reference channel's blanked
     stretches, widened by that much on either side, cover it on every element.
     """
-    ref = x[:, reference_channel]
-    hit = (blanked_reference == 0.0) & (ref != 0.0)
-    if not hit.any():
+    starts, stops = _blanked_stretches(x, blanked_reference, reference_channel, spread_samples)
+    if not starts.size:
         return x
-    if spread_samples > 0:
-        counts = np.convolve(hit.astype(np.int32), np.ones(2 * spread_samples + 1, np.int32), mode="same")
-        hit = counts > 0
-    return np.where(hit[:, None], 0.0, x)
+    out = np.array(x, float)
+    for a, b in zip(starts, stops):
+        out[a:b] = 0.0
+    return out
 
 
 def front_end_array(x: np.ndarray, fs: float, config: FrameConfig, settings: ReceiverSettings,
@@ -958,16 +974,23 @@ def front_end_array(x: np.ndarray, fs: float, config: FrameConfig, settings: Rec
     s = settings
     plan = plan_front_end(config, fs, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
     blanker = None
+    stretches = (np.zeros(0, int), np.zeros(0, int))
     if s.blank_impulses:
         blanker = ImpulseBlanker(threshold=s.impulse_threshold)
         ref = x[:, reference_channel]
-        y0 = np.concatenate([blanker.push(ref), blanker.flush()])
+        # in blocks, as the streaming receiver feeds it: the blanker's envelope pass runs only on the blocks
+        # that hold an impulse (one push of the whole recording ran it over every sample: 0.2 s per 31 s)
+        y0 = np.concatenate([*(blanker.push(ref[i:i + BLANKER_BLOCK]) for i in range(0, len(ref), BLANKER_BLOCK)),
+                             blanker.flush()])
         if blanker.n_blanked:
-            x = blank_like_reference(x, y0, reference_channel, spread_samples)
+            stretches = _blanked_stretches(x, y0, reference_channel, spread_samples)
     bbs, tones = [], []
     for k in range(x.shape[1]):
         fe = FrontEnd(plan)
-        a, b = fe.push(x[:, k])
+        xk = np.array(x[:, k], float)  # contiguous (the front end copies it anyway)
+        for i0, i1 in zip(*stretches):
+            xk[i0:i1] = 0.0
+        a, b = fe.push(xk)
         c, d = fe.flush()
         bbs.append(np.concatenate([a, c]))
         tones.append(np.concatenate([b, d]))
@@ -1032,7 +1055,7 @@ def receive_array(
         One per record (None without a direction).
     """
     from .measure import NOISE_WINDOW_S, frame_span_s
-    from .stream import Receiver, _Buffers
+    from .stream import Receiver, _Buffers, _one_blas_thread
 
     x = np.asarray(x, float)
     if x.ndim != 2 or x.shape[1] < 2:
@@ -1045,56 +1068,58 @@ def receive_array(
     pilot = pilot_symbols(config.n_pilot, config.pilot_seed) if pilot is None else np.asarray(pilot, complex)
     aperture_m = float(np.max(np.linalg.norm(positions_m[:, None] - positions_m[None], axis=-1)))
     spread = math.ceil(aperture_m / c * fs) + 1  # a click's spread over the elements [samples]
-    plan, bb, tone, blanker = front_end_array(x, fs, config, s, reference_channel, spread)
-    if complex_gains is not None:
-        g = np.asarray(complex_gains, complex)[None, :]
-        bb, tone = bb / g, tone / g
-    det = ArrayDetector(config, plan.fs_data, x.shape[1], v_max_mps=s.v_max_mps, sound_speed_mps=c,
-                        false_alarms_per_hour=s.false_alarms_per_hour, pilot=pilot)
-    detections = det.find_all(bb)
-    rx = Receiver(config, emissions=emissions, settings=s, pilot=pilot, payloads=payloads)
-    rx.plan, rx.detector, rx._blanker = plan, det.base, blanker
-    span = frame_span_s(config, v_max_mps=s.v_max_mps, sound_speed_mps=c)
-    y_bb, y_tone = bb[:, reference_channel].copy(), tone[:, reference_channel].copy()
-    f_data, f_tone = plan.data.centre_hz, plan.tone.centre_hz
-    records: list[MeasurementRecord] = []
-    out_doas: list[DoaEstimate | None] = []
-    for d in detections:
-        v0 = d.doppler_hz * c / config.carrier_hz
-        try:
-            corr = baseband_correlation(bb, plan.fs_data, f_data, config=config, pilot=pilot,
-                                        t_arrival_s=d.t_start_s, v_mps=v0, sound_speed_mps=c)
-        except ConfigError:
-            corr = None  # the pilot is cut by the recording's edge: no direction
-        doa = None if corr is None else estimate_doa(corr, positions_m, config=config, sound_speed_mps=c, v_mps=v0,
-                                                     position_sigma_m=position_sigma_m, assume=assume)
-        if combine and doa is not None:
-            noise = np.abs(doa.amplitudes) ** 2 / doa.snr
-            w = np.conj(doa.amplitudes) / noise
-            # combined noise level = the reference channel's (the noise the measurement sees around the frame)
-            w = w * math.sqrt(noise[reference_channel] / np.sum(np.abs(w) ** 2 * noise))
-            rel = doa.lags_s - doa.t0_s  # each channel to the body origin's time: the range is the origin's
-            t_a = d.t_start_s
-            t_end = t_a + config.frame_duration_s * (1 + 2 * s.v_max_mps / c) + COMBINE_PAD_S
-            _splice(y_bb, bb, plan.fs_data, f_data, t_a - COMBINE_PAD_S, t_end, rel, w)
-            _splice(y_tone, tone, plan.fs_tone, f_tone, t_a - COMBINE_PAD_S, t_end, rel, w)
-        # the measurement sees the frame's neighbourhood only, as in the streaming receiver's buffers
-        state = _Buffers()
-        t_lo, t_hi = d.t_start_s - 2 * COMBINE_PAD_S - NOISE_WINDOW_S, d.t_start_s + span + COMBINE_PAD_S
-        state.bb_start = max(0, math.floor(t_lo * plan.fs_data))
-        state.tone_start = max(0, math.floor(t_lo * plan.fs_tone))
-        state.bb = y_bb[state.bb_start: max(state.bb_start, math.ceil(t_hi * plan.fs_data))]
-        state.tone = y_tone[state.tone_start: max(state.tone_start, math.ceil(t_hi * plan.fs_tone))]
-        for rec in rx._measure_ready([d], state, plan, span, final=True):
-            if doa is None:
-                records.append(rec)
-                out_doas.append(None)
-                continue
-            records.append(dataclasses.replace(
-                rec, azimuth_body_rad=doa.azimuth_rad, elevation_body_rad=doa.elevation_rad,
-                sigma_azimuth_body_rad=doa.sigma_azimuth_rad, sigma_elevation_body_rad=doa.sigma_elevation_rad,
-                n_channels=int(x.shape[1])))
-            out_doas.append(doa)
+    # one BLAS thread for the whole pass (the per-frame work is many small products: receive/stream.py _one_blas_thread)
+    with _one_blas_thread():
+        plan, bb, tone, blanker = front_end_array(x, fs, config, s, reference_channel, spread)
+        if complex_gains is not None:
+            g = np.asarray(complex_gains, complex)[None, :]
+            bb, tone = bb / g, tone / g
+        det = ArrayDetector(config, plan.fs_data, x.shape[1], v_max_mps=s.v_max_mps, sound_speed_mps=c,
+                            false_alarms_per_hour=s.false_alarms_per_hour, pilot=pilot)
+        detections = det.find_all(bb)
+        rx = Receiver(config, emissions=emissions, settings=s, pilot=pilot, payloads=payloads)
+        rx.plan, rx.detector, rx._blanker = plan, det.base, blanker
+        span = frame_span_s(config, v_max_mps=s.v_max_mps, sound_speed_mps=c)
+        y_bb, y_tone = bb[:, reference_channel].copy(), tone[:, reference_channel].copy()
+        f_data, f_tone = plan.data.centre_hz, plan.tone.centre_hz
+        records: list[MeasurementRecord] = []
+        out_doas: list[DoaEstimate | None] = []
+        for d in detections:
+            v0 = d.doppler_hz * c / config.carrier_hz
+            try:
+                corr = baseband_correlation(bb, plan.fs_data, f_data, config=config, pilot=pilot,
+                                            t_arrival_s=d.t_start_s, v_mps=v0, sound_speed_mps=c)
+            except ConfigError:
+                corr = None  # the pilot is cut by the recording's edge: no direction
+            doa = None if corr is None else estimate_doa(corr, positions_m, config=config, sound_speed_mps=c, v_mps=v0,
+                                                         position_sigma_m=position_sigma_m, assume=assume)
+            if combine and doa is not None:
+                noise = np.abs(doa.amplitudes) ** 2 / doa.snr
+                w = np.conj(doa.amplitudes) / noise
+                # combined noise level = the reference channel's (the noise the measurement sees around the frame)
+                w = w * math.sqrt(noise[reference_channel] / np.sum(np.abs(w) ** 2 * noise))
+                rel = doa.lags_s - doa.t0_s  # each channel to the body origin's time: the range is the origin's
+                t_a = d.t_start_s
+                t_end = t_a + config.frame_duration_s * (1 + 2 * s.v_max_mps / c) + COMBINE_PAD_S
+                _splice(y_bb, bb, plan.fs_data, f_data, t_a - COMBINE_PAD_S, t_end, rel, w)
+                _splice(y_tone, tone, plan.fs_tone, f_tone, t_a - COMBINE_PAD_S, t_end, rel, w)
+            # the measurement sees the frame's neighbourhood only, as in the streaming receiver's buffers
+            state = _Buffers()
+            t_lo, t_hi = d.t_start_s - 2 * COMBINE_PAD_S - NOISE_WINDOW_S, d.t_start_s + span + COMBINE_PAD_S
+            state.bb_start = max(0, math.floor(t_lo * plan.fs_data))
+            state.tone_start = max(0, math.floor(t_lo * plan.fs_tone))
+            state.bb = y_bb[state.bb_start: max(state.bb_start, math.ceil(t_hi * plan.fs_data))]
+            state.tone = y_tone[state.tone_start: max(state.tone_start, math.ceil(t_hi * plan.fs_tone))]
+            for rec in rx._measure_ready([d], state, plan, span, final=True):
+                if doa is None:
+                    records.append(rec)
+                    out_doas.append(None)
+                    continue
+                records.append(dataclasses.replace(
+                    rec, azimuth_body_rad=doa.azimuth_rad, elevation_body_rad=doa.elevation_rad,
+                    sigma_azimuth_body_rad=doa.sigma_azimuth_rad, sigma_elevation_body_rad=doa.sigma_elevation_rad,
+                    n_channels=int(x.shape[1])))
+                out_doas.append(doa)
     return records, out_doas
 
 
