@@ -49,6 +49,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..config import FrameConfig
 from ..errors import ConfigError, InputFileError
@@ -784,6 +785,43 @@ def baseband_correlation(
                             float(fs))
 
 
+@njit(cache=True, nogil=True)
+def _power_rows(c, n_out, power):
+    """|c[k, j]|² of each channel's first ``n_out`` lags into power (K, n_out), float32."""
+    for k in range(c.shape[0]):
+        for j in range(n_out):
+            power[k, j] = c[k, j].real * c[k, j].real + c[k, j].imag * c[k, j].imag
+
+
+@njit(cache=True, nogil=True)
+def _direct_correlation(r, q, lags, bins, out):
+    """out[h, k] = Σ_i r[lags[h] + i, k] q[bins[h], i]: the bank's correlation at a few lags."""
+    n_ch, n_taps = r.shape[1], q.shape[1]
+    for h in range(len(lags)):
+        j, b = lags[h], bins[h]
+        for k in range(n_ch):
+            acc = 0j
+            for i in range(n_taps):
+                acc += r[j + i, k] * q[b, i]
+            out[h, k] = acc
+
+
+@njit(cache=True, nogil=True)
+def _best_bin(power, scale, z, best):
+    """z[j] = max_b Σ_k scale[k] power[b, k, j] and its bin (the first of equal ones), in place."""
+    n_bins, n_ch, n_out = power.shape
+    acc = np.empty(n_out, np.float32)
+    for b in range(n_bins):
+        acc[:] = 0.0
+        for k in range(n_ch):
+            for j in range(n_out):
+                acc[j] += scale[k] * power[b, k, j]
+        for j in range(n_out):
+            if b == 0 or acc[j] > z[j]:
+                z[j] = acc[j]
+                best[j] = b
+
+
 class ArrayDetector:
     """Pilot detection on all channels: non-coherent sum of the channels' normalised correlations.
 
@@ -834,21 +872,22 @@ class ArrayDetector:
         # channels along the first axis: each FFT runs on contiguous samples
         spectrum = scipy.fft.fft(np.ascontiguousarray(r.T, dtype=np.complex64), n, axis=-1)
         pilot = np.conj(scipy.fft.fft(b.template.astype(np.complex64), n))
-        shifts = np.round(b.doppler_hz * n / b.fs).astype(np.int64)
-        corr = np.empty((len(shifts), K, n_out), np.complex64)
+        shifts = np.round(b.doppler_hz * n / b.fs).astype(np.int64) % n
         power = np.empty((len(shifts), K, n_out), np.float32)
+        product = np.empty((K, n), np.complex64)
         for i, m in enumerate(shifts):
-            corr[i] = scipy.fft.ifft(spectrum * np.roll(pilot, m)[None, :], axis=-1, overwrite_x=True)[:, :n_out]
-            np.abs(corr[i], out=power[i])
-        power *= power
+            m = int(m)  # product = spectrum · roll(pilot, m), without the roll's copy (as the single detector)
+            np.multiply(spectrum[:, m:], pilot[None, : n - m], out=product[:, m:])
+            np.multiply(spectrum[:, :m], pilot[None, n - m:], out=product[:, :m])
+            _power_rows(scipy.fft.ifft(product, axis=-1, overwrite_x=True), n_out, power[i])
         sample = power[:, :, ::4].transpose(1, 0, 2).reshape(K, -1)  # every 4th lag, as the single detector
         # a noiseless recording keeps Z finite (the floor from the sampled lags: a full pass over power
         # cost a third of the statistics)
         noise = np.maximum(np.median(sample, axis=1) / math.log(2), 1e-6 * np.max(sample, axis=1))
-        zb = np.einsum("bkj,k->bj", power, (1.0 / np.maximum(noise, np.finfo(np.float32).tiny)).astype(np.float32))
-        best = np.argmax(zb, axis=0)
-        lag = np.arange(n_out)
-        z = zb[best, lag].astype(float)
+        scale = (1.0 / np.maximum(noise, np.finfo(np.float32).tiny)).astype(np.float32)
+        z32, best = np.zeros(n_out, np.float32), np.zeros(n_out, np.int64)
+        _best_bin(power, scale, z32, best)
+        z = z32.astype(float)
         rho = np.zeros(n_out)
         # ρ at the local maxima of Z above η only: the detector's arrivals and strongest paths are such peaks
         peak = np.ones(n_out, bool)
@@ -856,7 +895,12 @@ class ArrayDetector:
         peak[:-1] &= z[:-1] >= z[1:]
         hit = np.flatnonzero((z >= b.eta) & peak)
         if hit.size:
-            rho[hit] = self._coherent_rho(r, corr[best[hit], :, hit], hit)
+            # c_k at those lags and bins by direct sums (the bank's circular correlation with the pilot
+            # spectrum rolled by m is Σ_i r_k[j + i] conj(p[i] e^{j2π m i/n}), no wrap for full-overlap lags)
+            q = np.conj(b.template[None, :] * np.exp(2j * np.pi * np.outer(shifts, np.arange(b.length)) / n))
+            c = np.empty((hit.size, K), complex)
+            _direct_correlation(np.ascontiguousarray(r, dtype=complex), q, hit, best[hit], c)
+            rho[hit] = self._coherent_rho(r, c, hit)
         return z, rho, best, np.sqrt(z)
 
     def _coherent_rho(self, r: np.ndarray, c: np.ndarray, lags: np.ndarray) -> np.ndarray:
