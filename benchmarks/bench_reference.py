@@ -103,6 +103,25 @@ def match(found, truth, tol_s=2e-3):
     return pairs, false
 
 
+def multipath_crlb_t(rx, replica, bound, row, e_n0: float) -> float:
+    """The arrival's CRLB with the truth's echoes as nuisance paths (each path's t_a, ε and complex gain unknown).
+
+    The joint Fisher matrix of every path of the simulator's truth (its delays, Dopplers and amplitudes, not
+    the receiver's fit) in white baseband noise (:meth:`~seamodem.receive.reference._PathFitter.echo_inflation`),
+    over the direct path's own: the single-path bound at the measured E/N0 times that inflation.
+    """
+    from seamodem.receive.reference import _PathFitter
+
+    fs, paths = rx.plan.fs_bb, row["paths"]
+    t0 = paths[0]["t_arrival_s"]
+    t = t0 - 0.002 + np.arange(int((replica.duration_s + 0.01 + max(p["t_arrival_s"] for p in paths) - t0) * fs)) / fs
+    fitter = _PathFitter(replica, t, rx.plan.centre_hz, fs, bound.ridge_slope_s, 1.0)
+    echoes = [(p["t_arrival_s"], p["v_r_true_mps"] / C, p["amplitude"]) for p in paths[1:]]
+    k_e, k_ridge = fitter.echo_inflation(t0, paths[0]["v_r_true_mps"] / C, paths[0]["amplitude"], echoes)
+    _, s_e, s_ridge = bound.at(e_n0)
+    return math.hypot(k_ridge * s_ridge, bound.ridge_slope_s * k_e * s_e)
+
+
 def accuracy_table(quick: bool) -> list[str]:
     count, period = (60, 1.0) if quick else (200, 1.0)
     refs = [parse_reference("lfm:19000-29000:0.05"), parse_reference("hfm:19000-29000:0.05"),
@@ -111,15 +130,16 @@ def accuracy_table(quick: bool) -> list[str]:
         f"## Through the channel simulator: {count} pings, one per {period:g} s, v_r ±3 m/s, |a| ≤ 0.2 m/s², "
         "surface + bottom echoes, white noise",
         "",
-        "| reference | SNR | Pd | false /h | t RMSE [µs] | t CRLB [µs] | ratio | ≤3σ t | v RMSE [m/s] | v CRLB [m/s] "
-        "| ratio | ≤3σ v | median σ_v [m/s] |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| reference | SNR | Pd | false /h | t RMSE [µs] | t CRLB [µs] | ratio | t CRLB, echoes [µs] | ratio | ≤3σ t "
+        "| v RMSE [m/s] | v CRLB [m/s] | ratio | ≤3σ v | median σ_v [m/s] |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for ref in refs:
-        bound = reference_crlb(reference_replica(ref))
+        replica = reference_replica(ref)
+        bound = reference_crlb(replica)
         for snr in (0.0, 10.0, 20.0):
             y, truth, _ = through_channel(ref, snr, count=count, period_s=period, seed=int(snr) + 1)
-            _, found = receive([ref], y)
+            rx, found = receive([ref], y)
             pairs, false = match(found, truth)
             et = np.array([f.fit.t_arrival_s - row["t_arrival_s"] for f, row in pairs])
             ev = np.array([f.fit.eps * C - row["v_r_mps"] for f, row in pairs])
@@ -128,17 +148,21 @@ def accuracy_table(quick: bool) -> list[str]:
             crlb = np.array([bound.at(f.fit.e_n0)[:2] for f, _ in pairs])
             crlb_t, crlb_v = math.sqrt(np.mean(crlb[:, 0] ** 2)), C * math.sqrt(np.mean(crlb[:, 1] ** 2))
             rt, rv = math.sqrt(np.mean(et**2)), math.sqrt(np.mean(ev**2))
+            crlb_mp = math.sqrt(np.mean([multipath_crlb_t(rx, replica, bound, row, f.fit.e_n0) ** 2 for f, row in pairs]))
             hours = len(y) / FS / 3600
             lines.append(
                 f"| {ref.name} | {snr:g} dB | {len(pairs) / len(truth):.3f} | {len(false) / hours:.0f} | {rt * 1e6:.2f} "
-                f"| {crlb_t * 1e6:.2f} | {rt / crlb_t:.2f} | {np.mean(np.abs(et) <= 3 * st):.3f} | {rv:.4f} | {crlb_v:.4f} "
+                f"| {crlb_t * 1e6:.2f} | {rt / crlb_t:.2f} | {crlb_mp * 1e6:.2f} | {rt / crlb_mp:.2f} | {np.mean(np.abs(et) <= 3 * st):.3f} | {rv:.4f} | {crlb_v:.4f} "
                 f"| {rv / crlb_v:.2f} | {np.mean(np.abs(ev) <= 3 * sv):.3f} | {np.median(sv):.4f} |"
             )
             print(lines[-1], flush=True)
     lines += [
         "",
         "Pd: pings found within 2 ms of the direct path's arrival; false /h: other detections per hour of recording "
-        "(an echo or an HFM ping found twice counts here). CRLB: joint (t_a, ε) bound at the measured E/N0.",
+        "(an echo or an HFM ping found twice counts here). CRLB: joint (t_a, ε) bound at the measured E/N0; "
+        "CRLB, echoes: the same with the truth's surface and bottom echoes as nuisance paths (`multipath_crlb_t`): "
+        "an echo within a few main lobes (an inverted surface echo 1.3–1.8 PN chips behind) leaves the direct "
+        "path's arrival uncertain at any SNR.",
     ]
     return lines
 

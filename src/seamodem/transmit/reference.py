@@ -358,6 +358,10 @@ class Replica:
         """
         t = np.asarray(t_s, dtype=float)
         u = (1 + eps) * (t - t_arrival_s)
+        ref = self.reference
+        if self._table is None:  # chirps: one complex exponential, w(u) e^{j(φ(u) − 2π f_rx t)}
+            phase, _ = _chirp_phase(ref, np.clip(u, 0, ref.duration_s))
+            return _window(ref, u / ref.duration_s) * np.exp(1j * (phase - 2 * np.pi * carrier_hz * t))
         return self.envelope(u) * np.exp(2j * np.pi * (self.centre_hz * u - carrier_hz * t))
 
 
