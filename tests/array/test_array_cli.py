@@ -89,6 +89,42 @@ def test_rx_flat_array_states_its_assumption(received, capsys):
         assert err < 4 * row["sigma_azimuth_body_rad"] + 1e-3
 
 
+def test_rx_linear_array_reports_the_cone_on_the_assumed_side(received, capsys):
+    # a fore-aft line of 4 (8 cm) through channel --array: only the angle ψ to the line is measured,
+    # cos ψ = cos(el) cos(az). The beacon is to starboard here (body azimuth ≈ −31°, elevation ≈ −3.5°);
+    # the default assumption (port, elevation 0) reports the mirror image, a starboard array file the truth
+    assert main(["channel", str(received / "beacon.wav"), "--scenario", str(received / "s.toml"), "--array",
+                 "line4:0.08", "-o", str(received / "line.wav"), "-q"]) == 0
+    side = json.loads((received / "line.json").read_text())
+    positions = side["channel"]["array"]["element_positions_m"]
+    (received / "starboard.json").write_text(json.dumps({"array": {"element_positions_m": positions,
+                                                                   "assume": "starboard"}}))
+    for spec, sign in (("line4:0.08", 1.0), (str(received / "starboard.json"), -1.0)):
+        out = received / "line.csv"
+        assert main(["rx", str(received / "line.wav"), "--array", spec, "-o", str(out), "-q"]) == 0
+        err = capsys.readouterr().err.strip().splitlines()
+        side_name = "port" if sign > 0 else "starboard"
+        assert len(err) == 1 and "warning" in err[0] and "cone" in err[0] and f"{side_name} side" in err[0]
+        meta = json.loads((received / "line.csv.json").read_text())
+        assert meta["array"]["geometry"] == "linear" and meta["array"]["assume"] == side_name
+        df = pd.read_csv(out)
+        assert len(df) == 2 and (df["n_channels"] == 4).all() and df["crc_ok"].all()
+        assert df["elevation_body_rad"].isna().all() and df["sigma_elevation_body_rad"].isna().all()
+        for _, row in df.iterrows():
+            truth = side["truth"][int(row["frame_index"])]["paths"][0]
+            az_t, el_t = truth["azimuth_body_rad"], truth["elevation_body_rad"]
+            assert az_t < -0.3  # the truth is to starboard: the port assumption must give the mirror
+            az = row["azimuth_body_rad"]
+            assert sign * az > 0  # on the assumed side
+            # the measured cone: ψ = acos(cos el cos az) of the truth, within 4σ (σ ≈ 0.3° at 12 dB)
+            psi_true = math.acos(math.cos(el_t) * math.cos(az_t))
+            assert abs(abs(az) - psi_true) < 4 * row["sigma_azimuth_body_rad"]
+            # modulo the stated ambiguity (the mirror through the line; elevation taken as 0, which moves ψ off
+            # |az| by |ψ − |az_t||) it is the truth
+            tol = 4 * row["sigma_azimuth_body_rad"] + abs(psi_true - abs(az_t))
+            assert abs(math.remainder(az - (-sign * az_t), 2 * math.pi)) < tol
+
+
 @pytest.mark.parametrize("argv, expected", [
     (["--array", "square"], "unknown array"),
     (["--array", "missing.toml"], "not found"),
