@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft
+from numba import njit
 
 from ..config import FrameConfig
 from ..transmit.pilot import pilot_symbols
@@ -99,6 +100,19 @@ def z_threshold(false_alarms_per_hour: float, n_bins: int, fs: float) -> float:
     return float(math.log(n_bins * fs * 3600.0 / false_alarms_per_hour))
 
 
+@njit(cache=True, nogil=True)
+def _bank_update(c, n_out, b, offset, sample, best, peak):
+    """One bin's |c|² over the first ``n_out`` lags into the running best bin and peak, and its every 4th lag
+    from ``offset`` on into ``sample``, in one pass (the numpy form's float32 operations, bit for bit)."""
+    for j in range(n_out):
+        power = c[j].real * c[j].real + c[j].imag * c[j].imag
+        if j % 4 == offset and j >= offset:
+            sample[(j - offset) // 4] = power
+        if power > peak[j]:
+            best[j] = b
+            peak[j] = power
+
+
 class PilotDetector:
     """Find frame starts in a stream of data-band baseband samples.
 
@@ -156,9 +170,23 @@ class PilotDetector:
         self.holdoff = int(config.frame_duration_s * (1 - 2 * v_max_mps / sound_speed_mps) * fs)
         #: lags of context before the scan position for the noise median
         self.context = int(DETECTION_CONTEXT_S * fs)
+        self._pilot_spectra: dict[int, np.ndarray] = {}
+        # sampled |c|² of the lags correlated by earlier calls (the noise median's context), and their lags
+        self._context_power = np.zeros((len(self.doppler_hz), 0), np.float32)
+        self._context_lags = np.zeros(0, np.int64)
 
-    def _bank_power(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """|c_b[j]|² at every 4th lag of every bin b; each full-overlap lag's best bin and its power.
+    def _pilot_spectrum(self, n: int) -> np.ndarray:
+        """conj(FFT_n(template)) in single precision, kept for the last few sizes (blocks of a stream repeat them)."""
+        cache = self._pilot_spectra
+        if n not in cache:
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[n] = np.conj(scipy.fft.fft(self.template.astype(np.complex64), n))
+        return cache[n]
+
+    def _bank_power(self, r: np.ndarray, offset: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """|c_b[j]|² at every 4th lag (j ≡ ``offset`` mod 4) of every bin b; each full-overlap lag's best bin
+        and its power.
 
         One FFT of r and one inverse per bin.
         The replica of bin b is p[i]·e^{j2π m_b i/N}, whose transform is P rolled by
@@ -168,26 +196,43 @@ class PilotDetector:
         n = scipy.fft.next_fast_len(len(r))
         # single precision: a detection statistic needs no more, and the FFTs run twice as fast
         spectrum = scipy.fft.fft(r.astype(np.complex64), n)
-        pilot = np.conj(scipy.fft.fft(self.template.astype(np.complex64), n))
+        pilot = self._pilot_spectrum(n)
         shifts = np.round(self.doppler_hz * n / self.fs).astype(np.int64)
-        sample = np.empty((len(shifts), -(-n_out // 4)), dtype=np.float32)  # every 4th lag, for the median
+        # every 4th lag, for the median
+        sample = np.empty((len(shifts), max(0, -(-(n_out - offset) // 4))), dtype=np.float32)
         best = np.zeros(n_out, dtype=np.int64)
         peak = np.zeros(n_out, dtype=np.float32)
+        product = np.empty(n, dtype=np.complex64)
         for b, m in enumerate(shifts):
-            c = scipy.fft.ifft(spectrum * np.roll(pilot, m))[:n_out]
-            power = c.real**2 + c.imag**2
-            sample[b] = power[::4]
-            best[power > peak] = b
-            np.maximum(peak, power, out=peak)
+            m = int(m) % n  # product = spectrum · roll(pilot, m), without the roll's copy
+            np.multiply(spectrum[m:], pilot[: n - m], out=product[m:])
+            np.multiply(spectrum[:m], pilot[n - m :], out=product[:m])
+            c = scipy.fft.ifft(product, overwrite_x=True)
+            _bank_update(c, n_out, b, offset, sample[b], best, peak)
         return sample, best, peak.astype(np.float64)
 
-    def statistics(self, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def statistics(self, r: np.ndarray, *, first_lag: int | None = None,
+                   context_from: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """z, ρ, best bin and |c| for every full-overlap lag of ``r``.
 
         Returns arrays of length len(r) − L + 1 (L the template length), lag j
         meaning the template starts at r[j].
+
+        With ``first_lag`` (the global index of r[0]), the noise median also
+        takes in the lags sampled by earlier calls from ``context_from`` on,
+        kept rather than computed again (the stream's context of
+        ``DETECTION_CONTEXT_S`` before the scan position, which the previous
+        call already correlated), and this call's sampled lags are kept for
+        the next; lags are sampled at global multiples of 4 either way.
         """
-        sample, best, peak = self._bank_power(r)
+        offset = 0 if first_lag is None else (-first_lag) % 4
+        sample, best, peak = self._bank_power(r, offset)
+        if first_lag is not None:
+            keep = (self._context_lags >= context_from) & (self._context_lags < first_lag)
+            sample = np.concatenate([self._context_power[:, keep], sample], axis=1)
+            self._context_lags = np.concatenate(
+                [self._context_lags[keep], first_lag + offset + 4 * np.arange(sample.shape[1] - np.count_nonzero(keep))])
+            self._context_power = sample
         # the floor (60 dB under the block's peak) keeps z finite in a noiseless recording
         noise = max(np.median(sample) / math.log(2), 1e-6 * float(np.max(peak)))
         energy = np.cumsum(np.concatenate([[0.0], np.abs(r) ** 2]))
@@ -214,10 +259,20 @@ class PilotDetector:
             Where the next call should resume.
         """
         lo = max(r_start, scan_from - self.context)
-        seg = r[lo - r_start :]
-        if len(seg) < self.length:
-            return [], scan_from
-        z, rho, best, amp = self.statistics(seg)
+        if "statistics" in self.__dict__:  # replaced (ArrayDetector): it is given the context's lags, as before
+            seg = r[lo - r_start :]
+            if len(seg) < self.length:
+                return [], scan_from
+            z, rho, best, amp = self.statistics(seg)
+        else:
+            # the lags before the scan position serve the noise median only, and the previous call
+            # correlated them: from half a lobe before it on (a peak's neighbours, for the first arrival)
+            first = max(lo, scan_from - self.half_lobe)
+            seg = r[first - r_start :]
+            if len(seg) < self.length:
+                return [], scan_from
+            z, rho, best, amp = self.statistics(seg, first_lag=first, context_from=lo)
+            lo = first
         n_lags = len(z)
         hit = (z >= self.eta) & (rho >= self.min_rho)
         out = []

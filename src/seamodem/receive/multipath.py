@@ -252,7 +252,8 @@ def fit_paths(
         return rows[key]
 
     def model(delays):
-        return np.column_stack([store[row(d)] for d in delays])
+        index = [row(d) for d in delays]  # before ``store`` is read: a new row may reallocate it
+        return np.column_stack([store[i] for i in index])
 
     def solve(delays):
         mat = model(delays)
