@@ -45,7 +45,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft
-import scipy.signal
 
 from ..dsp import lowpass_taps
 from ..errors import ConfigError
