@@ -68,3 +68,26 @@ def test_dichotomy_and_tone_ml_on_a_clean_tone():
     fit = tone_frequency_ml(0.7 * np.exp(2j * np.pi * 23.456 * t + 0.4j), t, w, search_hz=80, noise_bandwidth_hz=1.0)
     assert fit.offset_hz == pytest.approx(23.456, abs=1e-5)  # dichotomy tolerance 1 µHz, noise-free
     assert abs(fit.amplitude) == pytest.approx(0.7, rel=1e-6)
+
+
+def test_streamed_detection_keeps_its_context_and_finds_what_one_pass_finds():
+    """find() on a growing buffer (the stream's use: the context before the scan position kept from the
+    previous call, not correlated again) gives the detections of one pass over the whole buffer."""
+    rng = np.random.default_rng(4)
+    det = PilotDetector(CFG, 13736.142857, v_max_mps=5, sound_speed_mps=1500)
+    r = (rng.standard_normal(60_000) + 1j * rng.standard_normal(60_000)) / np.sqrt(2)
+    starts = [9_000, 27_500, 46_123]
+    for s in starts:
+        r[s : s + det.length] += 0.5 * det.template
+    whole, _ = PilotDetector(CFG, 13736.142857, v_max_mps=5, sound_speed_mps=1500).find(r, 0, 0, final=True)
+    streamed, scan_from = [], 0
+    for end in range(7_000, len(r) + 7_000, 7_000):
+        found, scan_from = det.find(r[: min(end, len(r))], 0, scan_from, final=end >= len(r))
+        streamed += found
+    assert len(whole) == len(streamed) == 3
+    for a, b in zip(whole, streamed):
+        assert a.t_start_s == b.t_start_s and a.doppler_hz == b.doppler_hz
+        assert abs(a.z - b.z) < 0.05 * a.z  # the noise median over differently sampled context lags
+        assert abs(a.rho - b.rho) < 1e-5
+    # the stream's context stays bounded: the kept lags span DETECTION_CONTEXT_S at most
+    assert det._context_lags.min() >= len(r) - det.length - det.context - 7_000

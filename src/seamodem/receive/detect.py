@@ -269,7 +269,7 @@ class PilotDetector:
             # correlated them: from half a lobe before it on (a peak's neighbours, for the first arrival)
             first = max(lo, scan_from - self.half_lobe)
             seg = r[first - r_start :]
-            if len(seg) < self.length:
+            if len(seg) - self.length < scan_from - first:  # no lag at or after the scan position yet
                 return [], scan_from
             z, rho, best, amp = self.statistics(seg, first_lag=first, context_from=lo)
             lo = first
