@@ -35,8 +35,11 @@ from ..errors import ConfigError
 
 __all__ = ["FrontEndPlan", "FrontEnd", "plan_front_end"]
 
-#: Target input block length [samples]; the actual N is a nearby multiple of the decimations.
-_BLOCK_TARGET = 1 << 18
+#: Target input block length [samples]; the actual N is a nearby multiple of the decimations. 2¹⁶
+#: (N = 66150 at 96 kHz): the real FFT costs 18–22 ns per sample there against 37 at 2¹⁸ (a 2 MB
+#: transform out of cache), and the overlap of 2 × margin (1120 samples) costs 1.7 %: the front end
+#: 11.4 → 4.8 ms CPU per 3 s of recording
+_BLOCK_TARGET = 1 << 16
 #: Extra width of the tone branch beyond ±f_max [Hz]: a wide transition keeps the
 #: filter short (≈ 11 ms at 96 kHz), so the tone's ends are hardly smeared.
 _TONE_TRANSITION_HZ = 500.0
