@@ -1,6 +1,6 @@
 """The inertial filter and its smoothers against paper 000's filters, the paper's Table 3, and χ² bands.
 
-    python benchmarks/bench_navigation_inertial.py [--runs 300] [--smoother-runs 100] [--only protocol|consistency|speed]
+    python benchmarks/bench_navigation_inertial.py [--runs 300] [--smoother-runs 100] [--only protocol|consistency|speed|divergence]
 
 - protocol: paper 000's Monte Carlo (boustrophedon, T_com 3–20 s, the paper's IMU), controller steering on
   the estimate, mean position error per T_com for the paper's EKF and ROSB, the inertial filter (range + v_r
@@ -11,6 +11,8 @@
   the batch smoother, σ_d ∈ {1 mm, 1 cm, 10 cm, 1 m, 5 m}, filter told the truth and started from a draw of
   its own prior; the 99 % band of the run-averaged statistic and the share of time steps inside it.
 - speed: batch smoother on a 26-minute mission (6200 steps), the full Monte Carlo with the inertial filter.
+- divergence: every mission in which the inertial filter leaves the truth by more than 50 m (paper-grade noise,
+  T_com 12–20 s), against the maximum a posteriori position given the same data up to that step.
 
 Figures are medians of runs on this (shared, 2-core) machine; tables go to benchmarks/results/.
 """
@@ -174,11 +176,106 @@ def speed(out: list) -> None:
     print("\n".join(out[-3:]), flush=True)
 
 
+def _causal_map(config, details, truth, k, start_at_truth):
+    """MAP track given the mission's data up to step k (the batch smoother on steps 0…k): its position at k."""
+    from seamodem.navigation.inertial import build_nodes, run_filter
+    from seamodem.navigation.smoothing import batch_smooth
+
+    icfg = config.inertial_config
+    s = details["sensors"][:k + 1]
+    t = np.arange(k + 1) * config.dt_s
+    fr = np.isfinite(s[:, 3])
+    nodes = build_nodes(t, s[:, 0], s[:, 1], s[:, 2], t[fr], s[fr, 3], s[fr, 4], config.noise.sigma_range_m ** 2,
+                        config.noise.sigma_vr_mps ** 2, heading_var=icfg.heading_sigma_rad ** 2)
+    ref, _ = config.reference()
+    z0, P0 = icfg.initial(ref[0, 0], ref[0, 1], 0.0, np.hypot(ref[0, 2], ref[0, 3]))
+    z0[2] = s[0, 0] - z0[4]
+    run = run_filter(nodes, icfg, beacon_xy=config.beacon_xy, z0=z0, P0=P0)
+    start = None
+    if start_at_truth:
+        start = run.states.copy()
+        start[:, :2] = truth[:k + 1]
+        step = np.diff(truth[:k + 2], axis=0)
+        start[:, 2] = np.unwrap(np.arctan2(step[:, 1], step[:, 0]))
+        start[:, 3] = np.hypot(step[:, 0], step[:, 1]) / config.dt_s
+    out = batch_smooth(run, max_iterations=40, start=start)
+    return float(np.hypot(*(out.states[-1, :2] - truth[k]))), out.converged, _map_cost(run, out.states)
+
+
+def _map_cost(run, track):
+    """The smoother's objective, −2 log posterior up to a constant, at a Cartesian track (N, n): start prior,
+    motion (process noise of the smoother's model), heading readings, range and v_r."""
+    from seamodem.navigation.inertial import _acoustic_model, _motion
+    from seamodem.navigation.smoothing import SMOOTHER_POSITION_RW
+
+    nodes, cfg = run.nodes, run.config
+    n = track.shape[1]
+    lay = cfg.layout
+    lay[3] = lay[4] = 0
+    qd = cfg.process_density.copy()
+    qd[0] = qd[1] = min(SMOOTHER_POSITION_RW, cfg.position_rw) ** 2
+    e = track[0] - run.z0
+    cost = float(e @ np.linalg.solve(run.P0, e))
+    fx, F = np.empty(n), np.empty((n, n))
+    h, H = np.empty(2), np.zeros((2, n))
+    for i in range(len(nodes)):
+        if i > 0:
+            _motion(track[i - 1], lay, nodes.omega[i], nodes.accel[i], nodes.dt_s[i], fx, F)
+            d = track[i] - fx
+            cost += float(np.sum(d * d / (qd * nodes.dt_s[i])))
+        if run.has_heading[i]:
+            nu = np.angle(np.exp(1j * (nodes.heading[i] - track[i, 2] - track[i, 4])))
+            cost += nu * nu / nodes.heading_var[i]
+        if nodes.has_acoustic[i] and run.status[i] != 2:
+            _acoustic_model(track[i], lay, run.beacon_xy, True, run.use_vr, h, H)
+            cost += float(np.sum((nodes.meas[i] - h) ** 2 / nodes.meas_var[i]))
+    return cost
+
+
+def divergence(out: list) -> None:
+    """Each diverged mission of the inertial filter at paper-grade noise: is the information there?
+
+    At the step of its largest error, the maximum a posteriori position given every measurement up to that step
+    (the batch smoother over steps 0…k: no causal estimator can do better on average) is computed twice: started
+    from the filter's track and from the true track. If both land where the filter is, the data up to then point
+    to the wrong place, and no filter could have stayed near the truth.
+    """
+    out.append("\n## Diverged missions at paper-grade noise (300 runs, seed 0): filter against the MAP given the "
+               "data up to the worst step")
+    out.append("MAP(filter start) / MAP(truth start): position error at step k of the batch smoother over steps "
+               "0..k started from the filter's / the true track, and its objective J (-2 log posterior + const: the "
+               "lower J is the MAP; a difference of 10 is a likelihood ratio of e^5); whole-mission batch: the "
+               "smoother with the data after k too")
+    out.append(f"{'bias model':>12} {'T_com':>5} {'run':>4} {'step':>5} | {'filter m':>8} | {'MAP filter start m, J':>22} | "
+               f"{'MAP truth start m, J':>22} | {'whole-mission batch m':>21}")
+    sd, sv = NOISES["paper-grade (3.46 m, 0.447 m/s)"]
+    for bias_model in ("drift", "random_walk"):
+        for tcom in (12.0, 15.0, 20.0):
+            config = MissionConfig(noise=NoiseModel(sigma_range_m=sd, sigma_vr_mps=sv, heading_bias_model=bias_model),
+                                   tcom_s=tcom)
+            ref, _ = config.reference()
+            n = ref.shape[0] - 1
+            for r in range(300):
+                err, _, truth, det = simulate_inertial_mission(config, mission_noise(0, r, n), filter="inertial",
+                                                               reference=ref)
+                if err.max() <= config.divergence_m:
+                    continue
+                k = int(err.argmax())
+                m_f, c_f, j_f = _causal_map(config, det, truth, k, False)
+                m_t, c_t, j_t = _causal_map(config, det, truth, k, True)
+                eb = simulate_inertial_mission(config, mission_noise(0, r, n), filter="batch", reference=ref)[0]
+                out.append(f"{bias_model:>12} {tcom:>4g}s {r:>4} {k:>5} | {err[k]:>8.1f} | "
+                           f"{m_f:>8.1f}{'' if c_f else '*':1} {j_f:>12.1f} | {m_t:>8.1f}{'' if c_t else '*':1} "
+                           f"{j_t:>12.1f} | {eb[k]:>21.1f}")
+                print(out[-1], flush=True)
+    out.append("* Gauss-Newton not converged in 40 iterations")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=300)
     parser.add_argument("--smoother-runs", type=int, default=100)
-    parser.add_argument("--only", choices=("protocol", "consistency", "speed"))
+    parser.add_argument("--only", choices=("protocol", "consistency", "speed", "divergence"))
     args = parser.parse_args()
     out = ["# bench_navigation_inertial"]
     if args.only in (None, "speed"):
@@ -187,6 +284,8 @@ def main() -> None:
         consistency(out)
     if args.only in (None, "protocol"):
         protocol(args.runs, args.smoother_runs, out)
+    if args.only in (None, "divergence"):
+        divergence(out)
     results = Path(__file__).parent / "results"
     results.mkdir(exist_ok=True)
     name = "bench_navigation_inertial" + (f"_{args.only}" if args.only else "") + ".txt"

@@ -251,6 +251,26 @@ def test_batch_smoother_is_the_least_squares_solution(with_bearing):
     assert np.all(np.linalg.eigvalsh(sm.covariances) > 0)
 
 
+def test_batch_smoother_from_another_start_reaches_the_same_minimum():
+    """A start a few metres off the track (inside the basin of one minimum) converges to the same track; its
+    own converged track as a start is a fixed point; a start of the wrong shape is refused."""
+    config, truth, run = _short_mission(4)
+    base = batch_smooth(run, max_iterations=30)
+    assert base.converged
+    moved = base.states.copy()
+    moved[:, :2] += np.array([3.0, -2.0])
+    moved[:, 3] += 0.1
+    again = batch_smooth(run, max_iterations=30, start=moved)
+    assert again.converged and again.iterations > 1
+    assert np.allclose(again.states, base.states, atol=1e-4)
+    fixed = batch_smooth(run, max_iterations=30, start=base.states)
+    assert fixed.iterations <= 2 and np.allclose(fixed.states, base.states, atol=1e-6)
+    with pytest.raises(ConfigError, match="start"):
+        batch_smooth(run, start=base.states[:-1])
+    with pytest.raises(ConfigError, match="start"):
+        batch_smooth(run, start=base.states, cartesian=False)
+
+
 def test_gnss_fix_pulls_the_track_and_shrinks_the_covariance():
     config, truth, run = _short_mission(3)
     k = len(run.nodes) // 2

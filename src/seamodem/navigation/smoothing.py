@@ -172,7 +172,7 @@ SMOOTHER_POSITION_RW = 0.005
 
 
 def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6, cartesian: bool = True,
-                 position_rw: float | None = SMOOTHER_POSITION_RW) -> SmoothedTrack:
+                 position_rw: float | None = SMOOTHER_POSITION_RW, start=None) -> SmoothedTrack:
     """Maximum a posteriori track over the whole mission (iterated extended Kalman smoother).
 
     Parameters
@@ -187,6 +187,10 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6,
     position_rw : float or None
         Position random walk of the smoother's motion model [m/√s], at most the filter's
         (:data:`SMOOTHER_POSITION_RW`); ``None``: the filter's ``config.position_rw``.
+    start : ndarray (N, n), optional
+        Cartesian track to start Gauss–Newton from (``cartesian`` must be true); default the filter's
+        Rauch–Tung–Striebel track. Starting from another track (e.g. the truth in a simulation) tells whether
+        the least-squares problem has another minimum there.
 
     Returns
     -------
@@ -211,11 +215,18 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6,
     C = _rts_gains(run.internal_states, run.internal_covariances, run.prior_states, run.prior_covariances, run.transitions)
     nominal, _ = _rts(run.internal_states, run.internal_covariances, run.prior_states, run.prior_covariances, C)
     lay, charts, z0, P0 = cfg.layout, run.charts, run.internal_z0, run.internal_P0
-    if cartesian and np.any(charts):
+    if start is not None:
+        start = np.asarray(start, dtype=float)
+        if not cartesian or start.shape != (N, n) or not np.all(np.isfinite(start)):
+            raise ConfigError("start", f"must be a finite Cartesian track of shape {(N, n)} (cartesian=True), "
+                                       f"got shape {start.shape}")
+    if cartesian and (np.any(charts) or start is not None):
         nominal, _ = to_cartesian(nominal, np.zeros((N, 2, 2)), charts, run.beacon_xy)
         z0, P0 = run.z0, run.P0
         lay[3] = lay[4] = 0
         charts = np.zeros(N, dtype=np.int8)
+        if start is not None:
+            nominal = start.copy()
     post, P_post = np.empty((N, n)), np.empty((N, n, n))
     prior, P_prior, F = np.empty((N, n)), np.empty((N, n, n)), np.empty((N, n, n))
     use_range = True
