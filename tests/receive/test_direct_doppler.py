@@ -46,3 +46,39 @@ def test_bank_doppler_is_the_direct_paths(paths):
     # and a common-Doppler fit (no per-echo drift) by −40 mm/s in the steep case
     err = _bank_errors_mps(paths)
     assert np.max(np.abs(err)) < 0.008
+
+
+def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_dbhz=30.0):
+    """Receiver._doppler's choice for a frame whose CRC failed and whose decisions fit is given."""
+    from types import SimpleNamespace
+
+    from seamodem.receive.wholeframe import WholeFrameFit
+
+    one = np.ones(1)
+    wf = WholeFrameFit(delays_s=np.array([0.1]), amplitudes=one + 0j, v_mps=np.array([v_fit]), accel_mps2=0 * one,
+                       sigma_v_mps=np.array([sigma_fit]), crlb_v_mps=np.array([sigma_fit]), es_n0=one,
+                       sigma_delay_s=np.array([1e-6]), n_reference=1000)
+    rx = Receiver(CFG, emissions=Emissions(times_s=[0.0]))
+    rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions")
+    m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10)),
+                        pilot=SimpleNamespace(snr_db=snr_db, v_mps=v_bank), paths=SimpleNamespace(delays_s=one))
+    return rx._doppler(m, object(), None, 0.0, 1.0, 1.0)
+
+
+def test_a_decisions_fit_far_from_the_pilot_bank_grows_its_sigma_and_yields_to_the_tone():
+    from seamodem.receive.bounds import pilot_velocity_crlb_mps
+
+    sigma_bank = float(pilot_velocity_crlb_mps(CFG, 6.0, sound_speed_mps=1500.0))
+    # agreeing with the bank (within 3 of its σ): the fit and its σ as they are
+    rec, timing = _decisions_fit_record(1.003, 0.002, 1.0 + 2 * sigma_bank, 1.0)
+    assert rec["v_r_source"] == "whole_frame_decisions" and rec["sigma_v_r_mps"] == 0.002 and timing[1] == 1e-6
+    # 0.3 m/s from the bank (wrong decisions in runs), 0.15 m/s from a tone that is itself 0.15 m/s off the
+    # bank (σ 0.12 m/s with that gap): its own σ (0.02) would pass the tone's test; grown to the gap beyond
+    # 3 σ_bank (0.29) it does not: the tone is the estimate, with the pilot's arrival
+    rec, timing = _decisions_fit_record(1.3, 0.02, 1.0, 1.15)
+    assert rec["v_r_source"] == "tone" and timing is None
+    # no tone to referee: the fit is kept, with its σ (and its timing's) grown by the gap
+    rec, timing = _decisions_fit_record(1.3, 0.02, 1.0, float("nan"))
+    grown = np.sqrt(0.02**2 + 0.3**2 - 9 * sigma_bank**2)
+    assert rec["v_r_source"] == "whole_frame_decisions"
+    assert rec["sigma_v_r_mps"] == pytest.approx(grown) and timing[1] == pytest.approx(1e-6 * grown / 0.02)
