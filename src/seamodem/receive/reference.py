@@ -419,21 +419,16 @@ def _real_normal_equations(m: np.ndarray, resid: np.ndarray) -> tuple[np.ndarray
     return mm @ mm.T, mm @ np.concatenate([resid.real, resid.imag])
 
 
-_SIDELOBES: dict[tuple, float] = {}
-#: conj FFT and energy of sampled replicas, per (replica, rate, carrier, ε, FFT size) (:meth:`_PathFitter.peaks`)
-_REPLICA_SPECTRA: dict[tuple, tuple[np.ndarray, float]] = {}
-
-
 def _peak_sidelobe(replica: Replica, fs: float, carrier_hz: float) -> float:
-    """Largest |autocorrelation|² of the sampled replica beyond ±1/B, over its peak (computed once per replica)."""
-    key = (id(replica), fs, carrier_hz)
-    if key not in _SIDELOBES:
+    """Largest |autocorrelation|² of the sampled replica beyond ±1/B, over its peak (once per replica, in its memo)."""
+    key = ("sidelobe", fs, carrier_hz)
+    if key not in replica.memo:
         p = _replica_samples(replica, fs, carrier_hz, 0.0)
         n = scipy.fft.next_fast_len(2 * len(p))
         a = np.abs(scipy.fft.ifft(np.abs(scipy.fft.fft(p, n)) ** 2)) ** 2
         lag = np.minimum(np.arange(n), n - np.arange(n)) / fs
-        _SIDELOBES[key] = float(np.max(a[lag > 1.0 / replica.reference.bandwidth_hz]) / a[0])
-    return _SIDELOBES[key]
+        replica.memo[key] = float(np.max(a[lag > 1.0 / replica.reference.bandwidth_hz]) / a[0])
+    return replica.memo[key]
 
 
 class _PathFitter:
@@ -566,13 +561,13 @@ class _PathFitter:
         """
         # the scan asks for the same few scales (its grid) on the same segment: both spectra are kept
         n = scipy.fft.next_fast_len(len(x) + int(math.ceil(self.replica.duration_s * self.fs / (1 - self.limit))) + 2)
-        key = (id(self.replica), self.fs, self.carrier_hz, float(eps), n)
-        if key not in _REPLICA_SPECTRA:
-            if len(_REPLICA_SPECTRA) > 256:
-                _REPLICA_SPECTRA.clear()
+        memo, key = self.replica.memo, ("spectrum", self.fs, self.carrier_hz, float(eps), n)
+        if key not in memo:
+            if len(memo) > 256:  # FFT sizes follow the segment's length: keep the memo bounded
+                memo.clear()
             p = _replica_samples(self.replica, self.fs, self.carrier_hz, eps)
-            _REPLICA_SPECTRA[key] = (np.conj(scipy.fft.fft(p, n)), float(np.sum(np.abs(p) ** 2)))
-        spectrum, energy = _REPLICA_SPECTRA[key]
+            memo[key] = (np.conj(scipy.fft.fft(p, n)), float(np.sum(np.abs(p) ** 2)))
+        spectrum, energy = memo[key]
         if self._x_spectrum is None or self._x_spectrum[0] is not x or len(self._x_spectrum[1]) != n:
             self._x_spectrum = (x, scipy.fft.fft(x, n))
         z = np.abs(scipy.fft.ifft(self._x_spectrum[1] * spectrum)[: len(x)]) ** 2

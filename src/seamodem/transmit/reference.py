@@ -320,6 +320,8 @@ class Replica:
     def __init__(self, reference: ReferenceWaveform, table: np.ndarray | None = None, table_rate_hz: float = 0.0):
         self.reference = reference
         self.centre_hz = reference.centre_hz
+        #: what receivers derive from this replica once (sampled spectra, sidelobe level), keyed by their settings
+        self.memo: dict = {}
         self._table = table
         self._rate = float(table_rate_hz)
         if table is not None:
