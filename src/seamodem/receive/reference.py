@@ -553,11 +553,17 @@ class _PathFitter:
             times = times + min(1.0, 0.5 / self.fs / max(float(np.max(np.abs(step))), 1e-300)) * step
         return times, a, float(np.real(np.vdot(a, b)))
 
-    def peaks(self, x, ta: float, eps: float, noise: float) -> np.ndarray:
+    def peaks(self, x, ta: float, eps: float, noise: float, *, split: bool = False) -> np.ndarray:
         """Arrivals of the replica's distinct correlation peaks at ε within (ta − EARLY_WINDOW_S, ta + ECHO_WINDOW_S).
 
         The strongest always, others when significant (|c|²/(σ² E_q) ≥ ECHO_Z after the strongest, ≥ EARLY_Z
         before it) and above the strongest's sidelobes; at most 1 + MAX_ECHOES.
+
+        ``split``: when the strongest peak's half-power hump spans ≥ 4 samples (a single path's spans 1–2) with
+        no other peak in it, a second start at its far end. Two paths 1–2 main lobes apart whose baseband phases
+        nearly agree (an inverted surface echo 150 µs behind at 24 kHz is 36° from the direct path) make one
+        broad hump; started from one point, the joint fit at the true scale misses the echo and explains less
+        than a wrong scale does (an LFM at 3 dB, one ping in 24 taken 650 µs along its ridge).
         """
         # the scan asks for the same few scales (its grid) on the same segment: both spectra are kept
         n = scipy.fft.next_fast_len(len(x) + int(math.ceil(self.replica.duration_s * self.fs / (1 - self.limit))) + 2)
@@ -592,6 +598,16 @@ class _PathFitter:
         # on the sample grid: the joint Gauss–Newton steps of :meth:`paths_at` refine them (a parabolic vertex
         # through |c| is biased for paths merged into one peak: PN7 at 20 dB through bench_reference's channel,
         # a surface echo 1.35 chips behind, 3.53 µs RMS with it against 2.52 µs without)
+        if split and chosen:  # beyond MAX_ECHOES if need be: a weak early peak must not take its place
+            k0 = chosen[0]
+            half = 0.5 * z[k0]
+            left = right = 0
+            while k0 - left - 1 >= 0 and z[k0 - left - 1] >= half:
+                left += 1
+            while k0 + right + 1 < len(z) and z[k0 + right + 1] >= half:
+                right += 1
+            if left + right + 1 >= 4 and not any(k0 - left <= j <= k0 + right for j in chosen[1:]):
+                chosen.append(k0 + right if right >= left else k0 - left)
         return lags[chosen].astype(float)
 
     def early_path(self, x, times: np.ndarray, eps: float, noise: float):
@@ -635,7 +651,7 @@ class _PathFitter:
         best = (-math.inf, eps0, ta0)
         grid = np.linspace(-self.limit, self.limit, SCAN_POINTS)
         for e in grid:
-            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise)
+            times = self.peaks(x, ta0 - self.g * (e - eps0), e, noise, split=True)
             times, _, energy = self.paths_at(x, times, e, steps=SCAN_STEPS)
             # each path beyond the first pays its detection threshold: otherwise the scales where a
             # mismatched replica's sidelobes pass for echoes would win by fitting them
@@ -644,7 +660,7 @@ class _PathFitter:
                 best = (score, e, float(times[0]))
         # every significant path at the best scale, found again from the strongest one there
         _, e_ref, t_strong = best
-        t_ref = self.peaks(x, min(t_strong, ta0 - self.g * (e_ref - eps0)), e_ref, noise)  # from the detector's first path
+        t_ref = self.peaks(x, min(t_strong, ta0 - self.g * (e_ref - eps0)), e_ref, noise, split=True)  # from the detector's first path
 
         def explained(e):
             return self.paths_at(x, t_ref - self.g * (e - e_ref), e)[2]
