@@ -135,6 +135,22 @@ def _noise_window(config: FrameConfig, t_arrival_s: float, fs: float, t0_s: floa
     return j0, j1
 
 
+@njit(cache=True, nogil=True)
+def _phasor_sums(spectra, f0, df, lags, out):
+    """out[k, l] = Σ_m spectra[k, m] e^{j2π lags[k, l] (f0 + m·df)}: the phasor turned bin by bin (one exp per
+    lag; the product of m unit phasors drifts by ~m·1e-16)."""
+    n_ch, n_bins = spectra.shape
+    for k in range(n_ch):
+        for l in range(lags.shape[1]):
+            w = np.exp(2j * np.pi * lags[k, l] * f0)
+            step = np.exp(2j * np.pi * lags[k, l] * df)
+            acc = 0j
+            for m in range(n_bins):
+                acc += spectra[k, m] * w
+                w *= step
+            out[k, l] = acc
+
+
 @dataclass(frozen=True, eq=False)
 class ArrayCorrelation:
     """Pilot correlations of every channel around one frame, as in-band spectra.
@@ -190,9 +206,17 @@ class ArrayCorrelation:
     def at(self, lags_s: np.ndarray) -> np.ndarray:
         """c_k(δ_k) for one lag per channel (shape (n_channels,)) or a grid (n_channels, n_lags)."""
         lags = np.asarray(lags_s, float)
+        f = self.freqs_hz
+        df = (f[-1] - f[0]) / max(len(f) - 1, 1)
+        if len(f) > 1 and np.allclose(np.diff(f), df, rtol=1e-9, atol=0.0):
+            # equally spaced bins (both correlations): a rotating phasor per lag instead of an exp per bin
+            grid = np.ascontiguousarray(lags.reshape(lags.shape[0], -1))
+            out = np.empty(grid.shape, complex)
+            _phasor_sums(np.ascontiguousarray(self.spectra, dtype=complex), float(f[0]), float(df), grid, out)
+            return out[:, 0] if lags.ndim == 1 else out
         if lags.ndim == 1:
-            return np.einsum("km,km->k", self.spectra, np.exp(2j * np.pi * lags[:, None] * self.freqs_hz[None, :]))
-        return np.einsum("km,klm->kl", self.spectra, np.exp(2j * np.pi * lags[:, :, None] * self.freqs_hz[None, None, :]))
+            return np.einsum("km,km->k", self.spectra, np.exp(2j * np.pi * lags[:, None] * f[None, :]))
+        return np.einsum("km,klm->kl", self.spectra, np.exp(2j * np.pi * lags[:, :, None] * f[None, None, :]))
 
 
 def _band_bins(n: int, fs: float, config: FrameConfig) -> np.ndarray:
