@@ -70,6 +70,10 @@ def add_parser(sub) -> None:
     s.add_argument("--gate", type=float, choices=(0.99, 0.999, 0.9999, 0.99999), metavar="P",
                    help="chi2 gate of the inertial filter's acoustic updates (default none: the simulated "
                         "measurements have no outliers; nav track gates records at 0.9999)")
+    s.add_argument("--window", type=float, default=120.0, metavar="S",
+                   help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve the last S "
+                        "seconds by Gauss-Newton and continue from the result (default 120; 0: off, the plain "
+                        "filter)")
     s.add_argument("--matched-r", action="store_true",
                    help="set the filter's R for range and v_r to the emulated variances (default: eq 25's 12 and 0.2)")
     s.add_argument("--q", type=float, metavar="VAR",
@@ -157,6 +161,10 @@ def add_parser(sub) -> None:
                    help="white noise of the heading sensor [deg] (default 1)")
     t.add_argument("--bias-instability-deg-h", type=float, metavar="DEG/H",
                    help="heading bias random walk, as degrees after one hour (default 5)")
+    t.add_argument("--window", type=float, default=120.0, metavar="S",
+                   help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve the last S "
+                        "seconds by Gauss-Newton and continue from the result (default 120; 0: off, the plain "
+                        "filter)")
     t.add_argument("--estimate", nargs="+", choices=("bias-drift", "current", "range-scale"), default=(),
                    metavar="STATE",
                    help="extra states of the inertial filter: bias-drift, current (2 states), range-scale")
@@ -201,6 +209,8 @@ def run_simulate(args: argparse.Namespace) -> int:
         config = replace(config, r_diag=(noise.sigma_range_m**2, noise.sigma_vr_mps**2, *config.r_diag[2:]))
     if args.gate is not None:
         config = replace(config, inertial=replace(config.inertial_config, gate_probability=args.gate))
+    if args.window != 120.0:
+        config = replace(config, inertial=replace(config.inertial_config, window_s=args.window))
     for t in args.tcom:
         replace(config, tcom_s=t)  # validates every T_com before any work
     out.mkdir(parents=True, exist_ok=True)
@@ -245,6 +255,7 @@ def run_track(args: argparse.Namespace) -> int:
         overrides["bias_rw"] = math.radians(args.bias_instability_deg_h) / 60.0  # σ after 3600 s = value
     for state in args.estimate:
         overrides["estimate_" + state.replace("-", "_")] = True
+    overrides["window_s"] = args.window
     smooth = "batch" if args.smooth else ("fixed-lag" if args.fixed_lag is not None else None)
     # what the readers repaired: one line each on stderr (also when the run then fails)
     with reported_warnings("nav track"):

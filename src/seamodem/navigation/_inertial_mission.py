@@ -15,15 +15,30 @@ import numpy as np
 from numba import njit
 
 from .imu import bias_step, imu_reading
-from .inertial import _cartesian, _gated_acoustic, _gated_bearing, _predict, _to_internal, _update_heading, _wrap
+from .inertial import (WINDOW_ITERATIONS, _cartesian, _gated_acoustic, _gated_bearing, _predict, _relinearize_window,
+                       _to_internal, _update_heading, _window_start, _wrap)
 from .vehicle import feedback_command, vehicle_step
+
+
+@njit(cache=True, nogil=True)
+def _record(k, z, P, F, lay, states, history, charts):
+    """Node k's prior (state, covariance, F from node k − 1; F None at node 0) into filter_nodes' history."""
+    m = z.shape[0]
+    charts[k] = lay[4]
+    states[k] = z
+    for a in range(m):
+        history[k, a, 0] = z[a]
+        for b in range(m):
+            history[k, a, 1 + b] = P[a, b]
+            history[k, a, m + 1 + b] = P[a, b]
+            history[k, a, 2 * m + 1 + b] = (1.0 if a == b else 0.0) if F is None else F[a, b]
 
 
 @njit(cache=True, nogil=True)
 def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beacon, dt, com_every, use_vr,
                             steer_on_estimate, v_min, v_max, omega_max, accel_max, current, range_scale, bias_rate,
                             z0, P0, lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations,
-                            second_order, bearing_sigma, gate_bearing, sensors):
+                            second_order, bearing_sigma, gate_bearing, window_s, window_nis, sensors):
     """Run one mission; return error (n+1,), estimate (n+1, 2), truth (n+1, 2), status (n+1,), nis (n+1,).
 
     Parameters (beyond :func:`~seamodem.navigation._kernels.mission_kernel`'s)
@@ -39,6 +54,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         issue 17); 0: no array. Its normal is ``noise[k − 1, 5]``, the v_r column of the step before the
         frame, which no kernel uses when ``com_every`` ≥ 2: the runs without an array see the same numbers.
     gate_bearing : χ² (1 dof) gate of a bearing update
+    window_s, window_nis : the window re-linearization (``inertial.filter_nodes``); ``window_s`` 0: off
     sensors : (n + 1, 6) output: heading, gyro, accelerometer readings, range, v_r and body azimuth (NaN
         without a frame, or without an array)
     """
@@ -60,6 +76,26 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     work = np.empty((5, m))
     Hw = np.zeros((2, m))
     meas = np.empty(2)
+    # the window re-linearization needs the filter's history and the sensors as nodes (filter_nodes' layout)
+    window = window_s > 0
+    N = n + 1 if window else 1
+    states = np.empty((N, m))
+    history = np.empty((N, m, 3 * m + 1))
+    charts = np.zeros(N, dtype=np.int8)
+    dts = np.full(N, dt)
+    has_heading = np.ones(N, dtype=np.bool_)
+    has_heading[0] = False  # the start holds step 0's reading
+    heading_var_n = np.full(N, heading_var)
+    used_frame = np.zeros(N, dtype=np.bool_)
+    used_bearing = np.zeros(N, dtype=np.bool_)
+    meas_n = np.zeros((N, 2))
+    meas_var_n = np.empty((N, 2))
+    meas_var_n[:, 0], meas_var_n[:, 1] = meas_var[0], meas_var[1]
+    no_fix = np.zeros(N, dtype=np.bool_)
+    fix_n = np.zeros((N, 2))
+    fix_var_n = np.ones(N)
+    bearing_n = np.zeros(N)
+    bearing_var_n = np.full(N, max(bearing_sigma, 1e-9) ** 2)
     x, y, psi, v = start[0], start[1], start[2], start[3]
     z[0] = x + start_offsets[0]
     z[1] = y + start_offsets[1]
@@ -71,6 +107,8 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     sensors[0, 0] = heading0
     sensors[0, 1] = sensors[0, 2] = 0.0
     sensors[0, 3] = sensors[0, 4] = np.nan
+    if window:
+        _record(0, z, P, None, lay, states, history, charts)
     ex, ey = _cartesian(z, lay, beacon)
     estimate[0, 0], estimate[0, 1] = ex, ey
     truth[0, 0], truth[0, 1] = x, y
@@ -93,6 +131,8 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
         sensors[k, 3] = sensors[k, 4] = sensors[k, 5] = np.nan
         _predict(z, P, lay, beacon, qd, omega_m, accel_m, dt, zp, F, A, Pp)
+        if window:
+            _record(k, z, P, F, lay, states, history, charts)
         if k % com_every == 0:
             dx, dy = x - beacon[0], y - beacon[1]
             d_true = np.sqrt(dx * dx + dy * dy)
@@ -109,8 +149,23 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
             # after the heading update, as filter_nodes orders a node's measurements
             az = _wrap(np.arctan2(beacon[1] - y, beacon[0] - x) - psi + bearing_sigma * noise[k - 1, 5])
             sensors[k, 5] = az
-            _, _, bearing_gated = _gated_bearing(z, P, lay, beacon, az, bearing_sigma * bearing_sigma, gate_bearing,
-                                                 gate_reset_after, bearing_gated, ph)
+            _, b_status, bearing_gated = _gated_bearing(z, P, lay, beacon, az, bearing_sigma * bearing_sigma,
+                                                        gate_bearing, gate_reset_after, bearing_gated, ph)
+            if window:
+                bearing_n[k] = az
+                used_bearing[k] = b_status != 2
+        if window:
+            states[k] = z
+            history[k, :, m + 1:2 * m + 1] = P
+            if k % com_every == 0 and status[k] != 2:
+                used_frame[k] = True
+                meas_n[k, 0], meas_n[k, 1] = sensors[k, 3], sensors[k, 4]
+                i0 = _window_start(k, dts, window_s)
+                if nis_out[k] > window_nis and i0 < k:
+                    _relinearize_window(i0, k, states, history, charts, lay, qd, beacon, dts, sensors[:, 1],
+                                        sensors[:, 2], has_heading, sensors[:, 0], heading_var_n, used_frame, meas_n,
+                                        meas_var_n, True, use_vr, no_fix, fix_n, fix_var_n, used_bearing,
+                                        bearing_n, bearing_var_n, WINDOW_ITERATIONS, z, P)
         ex, ey = _cartesian(z, lay, beacon)
         estimate[k, 0], estimate[k, 1] = ex, ey
         truth[k, 0], truth[k, 1] = x, y

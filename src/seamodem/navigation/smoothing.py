@@ -24,8 +24,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import ConfigError
-from .inertial import (FilterRun, _acoustic_model, _convert, _motion, _process_polar, _propagate_cov, _update_bearing,
-                       _update_heading, _update_position, _wrap, to_cartesian)
+from .inertial import FilterRun, _linearized_pass, _rts, _rts_gains, to_cartesian
 
 __all__ = ["SmoothedTrack", "batch_smooth", "fixed_lag_smooth"]
 
@@ -45,112 +44,6 @@ class SmoothedTrack:
         self.iterations = iterations
         self.lag_s = lag_s
         self.converged = converged
-
-
-@njit(cache=True, nogil=True)
-def _rts_gains(post, P_post, prior, P_prior, F):
-    """C_k = P⁺_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹ for k = 0…N−2 (row N−1 zero)."""
-    N, n = post.shape
-    C = np.zeros((N, n, n))
-    for k in range(N - 1):
-        # P⁻_{k+1} Cᵀ = F_{k+1} P⁺_k
-        Ct = np.linalg.solve(P_prior[k + 1], F[k + 1] @ P_post[k])
-        C[k] = Ct.T
-    return C
-
-
-@njit(cache=True, nogil=True)
-def _rts(post, P_post, prior, P_prior, C):
-    N, n = post.shape
-    xs = post.copy()
-    Ps = P_post.copy()
-    for k in range(N - 2, -1, -1):
-        xs[k] = post[k] + C[k] @ (xs[k + 1] - prior[k + 1])
-        Pk = P_post[k] + C[k] @ (Ps[k + 1] - P_prior[k + 1]) @ C[k].T
-        Ps[k] = 0.5 * (Pk + Pk.T)
-    return xs, Ps
-
-
-@njit(cache=True, nogil=True)
-def _linearized_pass(nominal, z0, P0, lay, charts, qd, beacon, dt, omega, accel, has_heading, heading, heading_var,
-                     use_frame, meas, meas_var, use_range, use_vr, has_fix, fix, fix_var, use_bearing, bearing,
-                     bearing_var, post, P_post, prior, P_prior, F_all):
-    """Kalman filter of the model linearized about ``nominal`` (one Gauss–Newton step, forward half).
-
-    ``charts`` (N,) is the filter's chart per node (0 Cartesian, 1 polar): ``nominal[i]`` is in chart
-    ``charts[i]``; where the chart changes, the step's Jacobian carries the change of coordinates.
-    """
-    N, n = nominal.shape
-    lay = lay.copy()
-    no_cov = np.zeros((n, n))
-    z = z0.copy()
-    P = P0.copy()
-    fx = np.empty(n)
-    F = np.empty((n, n))
-    A = np.empty((n, n))
-    Pp = np.empty((n, n))
-    ph = np.empty(n)
-    h = np.empty(2)
-    H = np.zeros((2, n))
-    for i in range(N):
-        if i > 0:
-            lay[4] = charts[i - 1]
-            _motion(nominal[i - 1], lay, omega[i], accel[i], dt[i], fx, F)
-            _convert(fx, no_cov, lay, beacon, charts[i], F)
-            for a in range(n):
-                acc = fx[a]
-                for b in range(n):
-                    acc += F[a, b] * (z[b] - nominal[i - 1, b])
-                ph[a] = acc
-            _propagate_cov(P, F, qd, dt[i], A, Pp)
-            lay[4] = charts[i]
-            _process_polar(Pp, nominal[i], lay, qd, dt[i])
-            for a in range(n):
-                z[a] = ph[a]
-                for b in range(n):
-                    P[a, b] = Pp[a, b]
-        else:
-            for a in range(n):
-                for b in range(n):
-                    F[a, b] = 1.0 if a == b else 0.0
-        lay[4] = charts[i]
-        for a in range(n):
-            prior[i, a] = z[a]
-            for b in range(n):
-                P_prior[i, a, b] = P[a, b]
-                F_all[i, a, b] = F[a, b]
-        if use_frame[i]:
-            rows = _acoustic_model(nominal[i], lay, beacon, use_range, use_vr, h, H)
-            for r in range(rows):
-                target = meas[i, 0] if (use_range and r == 0) else meas[i, 1]
-                var = meas_var[i, 0] if (use_range and r == 0) else meas_var[i, 1]
-                nu = target - h[r]
-                for b in range(n):
-                    nu -= H[r, b] * (z[b] - nominal[i, b])
-                s = var
-                for a in range(n):
-                    acc = 0.0
-                    for b in range(n):
-                        acc += P[a, b] * H[r, b]
-                    ph[a] = acc
-                    s += H[r, a] * acc
-                for a in range(n):
-                    z[a] += ph[a] / s * nu
-                for a in range(n):
-                    for b in range(n):
-                        P[a, b] -= ph[a] * ph[b] / s
-        if has_heading[i]:
-            # the heading row is linear: the same update as the filter's, angle wrapped about the nominal
-            _update_heading(z, P, nominal[i, 2] + nominal[i, 4] + _wrap(heading[i] - nominal[i, 2] - nominal[i, 4]),
-                            heading_var[i], ph)
-        if use_bearing[i]:
-            _update_bearing(z, P, lay, beacon, nominal[i], bearing[i], bearing_var[i], np.inf, True, ph)
-        if has_fix[i]:
-            _update_position(z, P, lay, beacon, nominal[i], fix[i], fix_var[i], ph)
-        for a in range(n):
-            post[i, a] = z[a]
-            for b in range(n):
-                P_post[i, a, b] = P[a, b]
 
 
 def _used_frames(run: FilterRun) -> np.ndarray:
