@@ -48,7 +48,7 @@ def test_bank_doppler_is_the_direct_paths(paths):
     assert np.max(np.abs(err)) < 0.008
 
 
-def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_dbhz=30.0):
+def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_dbhz=30.0, es_n0=1.0):
     """Receiver._doppler's choice for a frame whose CRC failed and whose decisions fit is given."""
     from types import SimpleNamespace
 
@@ -56,13 +56,14 @@ def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_
 
     one = np.ones(1)
     wf = WholeFrameFit(delays_s=np.array([0.1]), amplitudes=one + 0j, v_mps=np.array([v_fit]), accel_mps2=0 * one,
-                       sigma_v_mps=np.array([sigma_fit]), crlb_v_mps=np.array([sigma_fit]), es_n0=one,
+                       sigma_v_mps=np.array([sigma_fit]), crlb_v_mps=np.array([sigma_fit]), es_n0=es_n0 * one,
                        sigma_delay_s=np.array([1e-6]), n_reference=1000)
     rx = Receiver(CFG, emissions=Emissions(times_s=[0.0]))
     rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions")
     m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10)),
                         pilot=SimpleNamespace(snr_db=snr_db, v_mps=v_bank), paths=SimpleNamespace(delays_s=one))
-    return rx._doppler(m, object(), None, 0.0, 1.0, 1.0)
+    # a lone path: the direct path has the whole SNR; Es/N0 = 10^0.6 · 1.4 = 5.6 expected, the fit's 1 (0.18 of it)
+    return rx._doppler(m, object(), None, 0.0, 1.0, 1.0, snr_db)
 
 
 def test_a_decisions_fit_far_from_the_pilot_bank_grows_its_sigma_and_yields_to_the_tone():
@@ -82,3 +83,21 @@ def test_a_decisions_fit_far_from_the_pilot_bank_grows_its_sigma_and_yields_to_t
     grown = np.sqrt(0.02**2 + 0.3**2 - 9 * sigma_bank**2)
     assert rec["v_r_source"] == "whole_frame_decisions"
     assert rec["sigma_v_r_mps"] == pytest.approx(grown) and timing[1] == pytest.approx(1e-6 * grown / 0.02)
+
+
+def test_a_decisions_fit_that_does_not_explain_the_frame_gets_the_tones_sigma_rule():
+    """Es/N0 of the fit 0.01 of what the SNR gives the path (decisions mostly wrong): its bias is unobservable,
+    its σ² is its own + its gap to the bank² + σ_bank² (as the tone's among echoes), and the smaller σ wins."""
+    from seamodem.receive.bounds import pilot_velocity_crlb_mps
+
+    sigma_bank = float(pilot_velocity_crlb_mps(CFG, 6.0, sound_speed_mps=1500.0))
+    # 0.01 m/s from the bank, the tone 0.2 m/s off it (single path: σ_tone the gap beyond 3 σ_bank)
+    rec, _ = _decisions_fit_record(1.01, 0.002, 1.0, 1.2, es_n0=0.056)
+    assert rec["v_r_source"] == "whole_frame_decisions"
+    assert rec["sigma_v_r_mps"] == pytest.approx(np.sqrt(0.002**2 + 0.01**2 + sigma_bank**2))
+    # the same fit with a good Es/N0 keeps its own σ (within 3 σ_bank of the bank)
+    rec, _ = _decisions_fit_record(1.01, 0.002, 1.0, 1.2, es_n0=1.0)
+    assert rec["sigma_v_r_mps"] == 0.002
+    # 0.5 m/s from the bank with the tone on it: the tone's σ is the smaller, the tone is the estimate
+    rec, timing = _decisions_fit_record(1.5, 0.002, 1.0, 1.0, es_n0=0.056)
+    assert rec["v_r_source"] == "tone" and timing is None
