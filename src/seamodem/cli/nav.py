@@ -21,6 +21,19 @@ TABLE_COLUMNS = ("tcom_s", "filter", "mean_error_m", "error_variance_m2", "etd_m
 SIM_FILTERS = ("inertial", "inertial-range", "fixed-lag", "batch", "proposed", "rosb")
 
 
+def _speed_floor(text: str) -> float | None:
+    """``--min-speed``: a finite speed [m/s] or ``none``."""
+    if text.strip().lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a speed in m/s or 'none', got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return value
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("nav", help="navigation: Monte Carlo of paper 000, or a track from measurement records",
                        description="Single-beacon navigation with the papers' estimators.")
@@ -74,6 +87,10 @@ def add_parser(sub) -> None:
                    help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve the last S "
                         "seconds by Gauss-Newton and continue from the result (default 120; 0: off, the plain "
                         "filter)")
+    s.add_argument("--min-speed", type=_speed_floor, default=0.0, metavar="MPS",
+                   help="the filter's speed floor [m/s]: an estimated speed below it is projected onto it (the vehicle "
+                        "moves forward; range and v_r cannot tell it from one backing along the reflected track; "
+                        "default 0; 'none': no floor)")
     s.add_argument("--matched-r", action="store_true",
                    help="set the filter's R for range and v_r to the emulated variances (default: eq 25's 12 and 0.2)")
     s.add_argument("--q", type=float, metavar="VAR",
@@ -165,6 +182,10 @@ def add_parser(sub) -> None:
                    help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve the last S "
                         "seconds by Gauss-Newton and continue from the result (default 120; 0: off, the plain "
                         "filter)")
+    t.add_argument("--min-speed", type=_speed_floor, default=0.0, metavar="MPS",
+                   help="the filter's speed floor [m/s]: an estimated speed below it is projected onto it (the vehicle "
+                        "moves forward; range and v_r cannot tell it from one backing along the reflected track; "
+                        "default 0; 'none': no floor)")
     t.add_argument("--estimate", nargs="+", choices=("bias-drift", "current", "range-scale"), default=(),
                    metavar="STATE",
                    help="extra states of the inertial filter: bias-drift, current (2 states), range-scale")
@@ -209,8 +230,9 @@ def run_simulate(args: argparse.Namespace) -> int:
         config = replace(config, r_diag=(noise.sigma_range_m**2, noise.sigma_vr_mps**2, *config.r_diag[2:]))
     if args.gate is not None:
         config = replace(config, inertial=replace(config.inertial_config, gate_probability=args.gate))
-    if args.window != 120.0:
-        config = replace(config, inertial=replace(config.inertial_config, window_s=args.window))
+    if args.window != 120.0 or args.min_speed != 0.0:
+        config = replace(config, inertial=replace(config.inertial_config, window_s=args.window,
+                                                  min_speed_mps=args.min_speed))
     for t in args.tcom:
         replace(config, tcom_s=t)  # validates every T_com before any work
     out.mkdir(parents=True, exist_ok=True)
@@ -256,6 +278,7 @@ def run_track(args: argparse.Namespace) -> int:
     for state in args.estimate:
         overrides["estimate_" + state.replace("-", "_")] = True
     overrides["window_s"] = args.window
+    overrides["min_speed_mps"] = args.min_speed
     smooth = "batch" if args.smooth else ("fixed-lag" if args.fixed_lag is not None else None)
     # what the readers repaired: one line each on stderr (also when the run then fails)
     with reported_warnings("nav track"):

@@ -15,8 +15,8 @@ import numpy as np
 from numba import njit
 
 from .imu import bias_step, imu_reading
-from .inertial import (WINDOW_ITERATIONS, _cartesian, _gated_acoustic, _gated_bearing, _predict, _relinearize_window,
-                       _to_internal, _update_heading, _window_start, _wrap)
+from .inertial import (WINDOW_ITERATIONS, _cartesian, _floor_speed, _gated_acoustic, _gated_bearing, _predict,
+                       _relinearize_window, _to_internal, _update_heading, _window_start, _wrap)
 from .vehicle import feedback_command, vehicle_step
 
 
@@ -38,7 +38,7 @@ def _record(k, z, P, F, lay, states, history, charts):
 def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beacon, dt, com_every, use_vr,
                             steer_on_estimate, v_min, v_max, omega_max, accel_max, current, range_scale, bias_rate,
                             z0, P0, lay, qd, heading_var, meas_var, gate, gate_reset_after, iterations,
-                            second_order, bearing_sigma, gate_bearing, window_s, window_nis, sensors):
+                            second_order, bearing_sigma, gate_bearing, window_s, window_nis, v_floor, sensors):
     """Run one mission; return error (n+1,), estimate (n+1, 2), truth (n+1, 2), status (n+1,), nis (n+1,).
 
     Parameters (beyond :func:`~seamodem.navigation._kernels.mission_kernel`'s)
@@ -55,6 +55,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         frame, which no kernel uses when ``com_every`` ≥ 2: the runs without an array see the same numbers.
     gate_bearing : χ² (1 dof) gate of a bearing update
     window_s, window_nis : the window re-linearization (``inertial.filter_nodes``); ``window_s`` 0: off
+    v_floor : the speed floor after each step's updates (``inertial._floor_speed``); −∞: none
     sensors : (n + 1, 6) output: heading, gyro, accelerometer readings, range, v_r and body azimuth (NaN
         without a frame, or without an array)
     """
@@ -154,6 +155,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
             if window:
                 bearing_n[k] = az
                 used_bearing[k] = b_status != 2
+        _floor_speed(z, P, v_floor)
         if window:
             states[k] = z
             history[k, :, m + 1:2 * m + 1] = P

@@ -135,6 +135,11 @@ class InertialConfig:
         off, stays within 50 m; the others are MAP-limited, docs/navigation.md); at receiver-grade noise means
         0.3–3.6 % lower with a random-walk bias, −2.3 to +1.5 % with a drifting one. Cost 3–5 × the filter's
         (1800 missions: 3.7 → 13.5 s at receiver grade, 3.8 → 18.8 s at paper grade). ``None`` or 0 s: off.
+    min_speed_mps : float or None
+        The vehicle moves forward: after each node's updates an estimated speed below this is projected onto
+        it (:func:`_floor_speed`). Range and v_r are blind to the track reflected about a closest approach
+        with the speed negated; ``None``: no floor (a vehicle that backs up, or one a head current pushes
+        backwards over ground when the current is not estimated).
     coordinates : {"polar", "cartesian"}
         ``"polar"`` (default): the position is (ρ, β), horizontal distance and bearing from the beacon,
         while the position's spread is below ρ/5 (Cartesian near the beacon, :data:`POLAR_ENTER`). Range
@@ -168,6 +173,7 @@ class InertialConfig:
     coordinates: str = "polar"
     window_s: float = 120.0
     window_probability: float | None = 0.99
+    min_speed_mps: float | None = 0.0
 
     def __post_init__(self):
         if self.coordinates not in ("cartesian", "polar"):
@@ -196,6 +202,8 @@ class InertialConfig:
         if self.window_probability is not None and self.window_probability not in CHI2_GATE:
             raise ConfigError("window_probability", f"must be one of {sorted(CHI2_GATE)} or None, "
                                                     f"got {self.window_probability!r}")
+        if self.min_speed_mps is not None and not math.isfinite(self.min_speed_mps):
+            raise ConfigError("min_speed_mps", f"must be finite or None, got {self.min_speed_mps!r}")
 
     @classmethod
     def from_noise_model(cls, noise, dt_s: float, **overrides) -> "InertialConfig":
@@ -270,6 +278,11 @@ class InertialConfig:
         if lay[2] >= 0:
             P[lay[2], lay[2]] = self.p0_scale**2
         return z, P
+
+    @property
+    def speed_floor(self) -> float:
+        """The kernels' speed floor [m/s]: :attr:`min_speed_mps`, or −∞ without one."""
+        return -math.inf if self.min_speed_mps is None else float(self.min_speed_mps)
 
     def window(self, dof: int) -> tuple[float, float]:
         """(window length [s], NIS threshold) of the window re-linearization for a frame of ``dof`` rows;
@@ -438,6 +451,26 @@ def _update_heading(z, P, heading, var, ph):
         for j in range(n):
             P[i, j] -= ph[i] * ph[j] / s
     return nu * nu / s
+
+
+@njit(cache=True, nogil=True)
+def _floor_speed(z, P, v_floor):
+    """Project the estimate onto v ≥ ``v_floor`` (the vehicle moves forward); returns whether it did.
+
+    Range and v_r cannot tell a vehicle approaching its closest point to the beacon from one receding on the
+    track reflected about that point with its speed negated: same ranges, same v_r, same heading. Where the
+    data leave that open (metres of range noise near a closest approach) a Gaussian filter can slide onto the
+    backward branch. The projection is the constrained estimate of minimum P⁻¹-distance (Simon & Chia 2002):
+    z ← z + P[:, v] (v_floor − z_v) / P[v, v], which moves every state correlated with the speed (the
+    position along the track) with it; P is kept.
+    """
+    if not (z[3] < v_floor) or P[3, 3] <= 0.0:
+        return False
+    d = (v_floor - z[3]) / P[3, 3]
+    for a in range(z.shape[0]):
+        z[a] += P[a, 3] * d
+    z[3] = v_floor
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -935,7 +968,7 @@ def _relinearize_window(i0, i, states, history, charts, lay, qd, beacon, dt, ome
 @njit(cache=True, nogil=True)
 def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var, has_acoustic,
                  meas, meas_var, use_range, use_vr, gate, gate_reset_after, iterations, second_order, has_fix, fix,
-                 fix_var, has_bearing, bearing, bearing_var, gate_bearing, history, window_s, window_nis):
+                 fix_var, has_bearing, bearing, bearing_var, gate_bearing, history, window_s, window_nis, v_floor):
     """Run the filter over nodes; fill the posterior states and covariances.
 
     Parameters
@@ -952,6 +985,7 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
         ``[:, :, n+1:2n+1]`` posterior covariance, ``[:, :, 2n+1:3n+1]`` F from node i − 1 to i
     window_s, window_nis : after a used frame whose NIS exceeds ``window_nis``, the last ``window_s`` seconds
         are re-linearized (:func:`_relinearize_window`); ``window_s`` 0: never
+    v_floor : the speed floor (:func:`_floor_speed`) after each node's updates; −∞: none
 
     Returns
     -------
@@ -1013,6 +1047,7 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
                 z, P, lay, beacon, bearing[i], bearing_var[i], gate_bearing, gate_reset_after, bearing_gated, ph)
         if has_fix[i]:
             _update_position(z, P, lay, beacon, z.copy(), fix[i], fix_var[i], ph)
+        _floor_speed(z, P, v_floor)
         for a in range(n):
             states[i, a] = z[a]
             for b in range(n):
@@ -1306,7 +1341,8 @@ def run_filter(nodes: Nodes, config: InertialConfig, *, beacon_xy, z0, P0, use_v
         zi, Pi, lay, config.process_density, beacon, nodes.dt_s, nodes.omega, nodes.accel, has_heading, nodes.heading,
         nodes.heading_var, nodes.has_acoustic, nodes.meas, nodes.meas_var, use_range, use_vr, gate,
         config.gate_reset_after, config.iterations, config.second_order, nodes.has_fix, nodes.fix, nodes.fix_var,
-        has_bearing, nodes.bearing, nodes.bearing_var, config.gate[0], history, window_s, window_nis)
+        has_bearing, nodes.bearing, nodes.bearing_var, config.gate[0], history, window_s, window_nis,
+        config.speed_floor)
     return FilterRun(nodes, config, beacon, use_vr, states, history, nis, status, z0, P0, has_heading, charts, zi, Pi,
                      b_nis, b_status, online_xy=online, windows=windows)
 

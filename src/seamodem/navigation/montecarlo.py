@@ -404,7 +404,7 @@ def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filte
         config.omega_max_rad_s, config.accel_max_mps2, np.asarray(config.current_mps, dtype=float),
         config.range_scale, config.noise.bias_rate(noise), z0, P0, icfg.layout, icfg.process_density,
         icfg.heading_sigma_rad**2, meas_var, gate, icfg.gate_reset_after, icfg.iterations, icfg.second_order,
-        bearing_sigma, icfg.gate[0], *icfg.window(2 if use_vr else 1), sensors)
+        bearing_sigma, icfg.gate[0], *icfg.window(2 if use_vr else 1), icfg.speed_floor, sensors)
     details = {"status": status, "nis": nis, "sensors": sensors}
     if filter in ("inertial", "inertial_range"):
         return error, estimate, truth, details
