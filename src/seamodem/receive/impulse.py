@@ -28,6 +28,15 @@ mixture noise and cost 2.1 dB of equaliser SNR; stretches sized to each
 impulse (4 samples for a lone impulse sample, ≈ 45 for a 0.1 ms click)
 blank a fraction of that (benchmarks/bench_doppler_paths.py).
 
+The scale is the costly part (a median per chunk). A chunk whose largest |x|
+is at most ``threshold`` · its own σ̂ cannot hold an impulse, and that is
+proved without its median when at least L − ⌊(L−1)/2⌋ of its samples reach
+max|x| / (``threshold`` · 1.4826) (the median is then at least that): the
+medians are taken only for the other chunks and their neighbours, and for
+every chunk once an impulse is found. The output is the one every median
+gives, bit for bit (tests/receive/test_impulse_blanker.py); in white noise
+≈ 5 % of the medians are taken (3.6 → 1.0 ms CPU per 3 s at 96 kHz).
+
 In white Gaussian noise a sample exceeds 5σ with probability 5.7e-7, so about
 5e-6 of the samples are blanked: no measurable loss. The blanker is
 streaming: it holds one chunk back. Its output does not depend on how the
@@ -136,18 +145,29 @@ class ImpulseBlanker:
         n_chunks = -(-len(buf) // L)
         mag = np.abs(buf)
         n_full = len(buf) // L
-        scales = np.empty(n_chunks)
-        scales[:n_full] = np.median(mag[: n_full * L].reshape(n_full, L), axis=1)
-        if n_chunks > n_full:  # the last, partial chunk (end of input)
-            scales[n_full] = np.median(mag[n_full * L :])
-        scales *= _MAD_TO_SIGMA
-        left = scales[0] if self._prev_scale is None else self._prev_scale
-        ext = np.concatenate([[left], scales, [scales[-1]]])
-        ref = np.maximum(np.maximum(ext[:-2], ext[1:-1]), ext[2:])
-        limit = np.where(ref > 0, self.threshold * ref, np.inf)
-        level = np.repeat(limit, L)[: len(buf)]
-        hit = mag > level
-        mask = _stretches(mag, hit, level * (self.extend_threshold / self.threshold), self.reach, self.guard)
+        # a full chunk whose largest |x| is at most threshold × its own scale holds no impulse, whatever its
+        # neighbours' scales (they only raise its level): its median is needed only when fewer than
+        # L − (L−1)//2 of its samples reach max/(threshold·1.4826), the median's lower middle order statistic
+        # (white noise: ≈ 0.3 % of the chunks). The medians are then taken only where an impulse can be; with
+        # none found, the output is the one all the medians give (no sample blanked), else all are taken
+        full = mag[: n_full * L].reshape(n_full, L)
+        peak = full.max(axis=1, initial=0.0)
+        bound = peak * ((1 + 1e-9) / (self.threshold * _MAD_TO_SIGMA))
+        maybe = np.count_nonzero(full >= bound[:, None], axis=1) < L - (L - 1) // 2
+        if n_chunks > n_full:  # the last, partial chunk (end of input): always measured
+            maybe = np.append(maybe, True)
+        keep = max(0, n_final // L - 1)  # the scale carried to the next call
+        scales = np.full(n_chunks, np.nan)
+        need = maybe | np.r_[maybe[1:], False] | np.r_[False, maybe[:-1]]
+        need[keep] = True
+        if self._prev_scale is None:
+            need[0] = True
+        hit = self._hits(mag, scales, need, maybe)
+        if hit.any() and not maybe.all():  # the stretches read the level of every chunk
+            hit = self._hits(mag, scales, np.ones(n_chunks, bool), np.ones(n_chunks, bool))
+        level = self._level if hit.any() else None
+        mask = (_stretches(mag, hit, level * (self.extend_threshold / self.threshold), self.reach, self.guard)
+                if level is not None else np.zeros(len(mag), bool))
         mask[: min(self._carry, len(mask))] = True
         out = buf[:n_final].copy()
         final_mask = mask[:n_final]
@@ -162,10 +182,32 @@ class ImpulseBlanker:
             self._starts.append(self._start + np.flatnonzero(edges == 1))
             self._stops.append(self._start + np.flatnonzero(edges == -1))
             self.n_blanked += int(np.count_nonzero(final_mask))
-        self._prev_scale = float(scales[max(0, n_final // L - 1)])
+        self._prev_scale = float(scales[keep])
         self._pending = buf[n_final:]
         self._start += n_final
         return out
+
+    def _hits(self, mag: np.ndarray, scales: np.ndarray, need: np.ndarray, where: np.ndarray) -> np.ndarray:
+        """Impulse samples of the chunks ``where``, the scales of the chunks ``need`` (⊇ where and their
+        neighbours) filled in ``scales``; the per-sample level is kept in ``self._level``."""
+        L = self.chunk
+        n_chunks = len(scales)
+        n_full = len(mag) // L
+        todo = need & np.isnan(scales)
+        rows = np.flatnonzero(todo[:n_full])
+        if rows.size == n_full:
+            scales[:n_full] = np.median(mag[: n_full * L].reshape(n_full, L), axis=1) * _MAD_TO_SIGMA
+        elif rows.size:
+            scales[rows] = np.median(mag[: n_full * L].reshape(n_full, L)[rows], axis=1) * _MAD_TO_SIGMA
+        if n_chunks > n_full and todo[-1]:
+            scales[n_full] = np.median(mag[n_full * L :]) * _MAD_TO_SIGMA
+        left = scales[0] if self._prev_scale is None else self._prev_scale
+        ext = np.concatenate([[left], scales, [scales[-1]]])
+        ref = np.maximum(np.maximum(ext[:-2], ext[1:-1]), ext[2:])
+        limit = np.where(ref > 0, self.threshold * ref, np.inf)
+        limit[~where] = np.inf
+        self._level = np.repeat(limit, L)[: len(mag)]
+        return mag > self._level
 
 
 def _stretches(mag: np.ndarray, hit: np.ndarray, low: np.ndarray, reach: int, guard: int) -> np.ndarray:
