@@ -31,6 +31,7 @@ frame is sought only ``holdoff_s`` later, so each frame is found once.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,6 +112,72 @@ def _bank_update(c, n_out, b, offset, sample, best, peak):
         if power > peak[j]:
             best[j] = b
             peak[j] = power
+
+
+def _cluster_crossings(hit: np.ndarray, amp: np.ndarray, *, lo: int, scan_from: int, window: int, holdoff: int,
+                       final: bool, first_arrival: Callable[[int, int], int]) -> tuple[list[tuple[int, int]], int]:
+    """Group a scan's threshold crossings into arrivals (one per transmission), from ``scan_from`` on.
+
+    After the first crossing at or after the scan position, the strongest crossing within ``window``
+    lags is found; ``first_arrival(j0, strongest)`` picks the arrival (the direct path may be weaker
+    than an echo); the next arrival is sought ``holdoff`` lags after it.
+
+    Parameters
+    ----------
+    hit : numpy.ndarray, bool, shape (n_lags,)
+        Lags that pass the detection tests; lag j is global index ``lo + j``.
+    amp : numpy.ndarray, shape (n_lags,)
+        Correlation amplitude at each lag (the strongest crossing is its maximum).
+    lo, scan_from : int
+        Global index of lag 0 and of the first lag to scan.
+    window, holdoff : int
+        Lags after the first crossing where a stronger path is sought; lags after an arrival skipped.
+    final : bool
+        No more lags will come: decide a window cut by the end.
+    first_arrival : callable
+        (first crossing, strongest crossing) → the arrival's lag.
+
+    Returns
+    -------
+    picks : list of (int, int)
+        Each arrival's lag and its cluster's strongest lag (indices into ``hit``).
+    scan_from : int
+        Global index where the next scan resumes.
+    """
+    n_lags = len(hit)
+    picks = []
+    pos = max(scan_from - lo, 0)
+    while True:
+        hits = np.flatnonzero(hit[pos:])
+        if hits.size == 0:
+            return picks, lo + n_lags if n_lags > pos else scan_from
+        j0 = pos + int(hits[0])
+        end = j0 + window
+        if end >= n_lags and not final:
+            return picks, lo + j0
+        end = min(end, n_lags - 1)
+        strongest = j0 + int(np.argmax(np.where(hit[j0 : end + 1], amp[j0 : end + 1], 0.0)))
+        j = first_arrival(j0, strongest)
+        picks.append((j, strongest))
+        pos = j + holdoff
+        if pos >= n_lags:
+            return picks, lo + pos
+
+
+def _first_distinct_peak(amp: np.ndarray, hit: np.ndarray, j0: int, strongest: int, *, fraction: float,
+                         half_lobe: int, gap: int) -> int:
+    """Earliest distinct peak in [j0, strongest − gap] strong enough to be the direct path, else ``strongest``.
+
+    A distinct peak is a crossing that is the maximum of ``amp`` over ±``half_lobe`` lags, with an
+    amplitude of at least ``fraction`` of the strongest; paths closer than ``gap`` lags to the
+    strongest are not resolved (noise on the main lobe's flank must not pass for an earlier path).
+    """
+    floor = fraction * amp[strongest]
+    w = half_lobe
+    for j in range(j0, strongest - gap + 1):
+        if hit[j] and amp[j] >= floor and amp[j] >= np.max(amp[max(0, j - w) : j + w + 1]):
+            return j
+    return strongest
 
 
 class PilotDetector:
@@ -273,43 +340,13 @@ class PilotDetector:
                 return [], scan_from
             z, rho, best, amp = self.statistics(seg, first_lag=first, context_from=lo)
             lo = first
-        n_lags = len(z)
         hit = (z >= self.eta) & (rho >= self.min_rho)
-        out = []
-        pos = max(scan_from - lo, 0)
-        while True:
-            hits = np.flatnonzero(hit[pos:])
-            if hits.size == 0:
-                return out, lo + n_lags if n_lags > pos else scan_from
-            j0 = pos + int(hits[0])
-            end = j0 + self.window
-            if end >= n_lags and not final:
-                return out, lo + j0
-            end = min(end, n_lags - 1)
-            strongest = j0 + int(np.argmax(np.where(hit[j0 : end + 1], amp[j0 : end + 1], 0.0)))
-            j = self._first_arrival(z, amp, hit, j0, strongest)
-            out.append(
-                Detection(
-                    t_start_s=(lo + j) / self.fs - self.tau_a_s,
-                    doppler_hz=float(self.doppler_hz[best[j]]),
-                    z=float(z[j]),
-                    rho=float(rho[j]),
-                )
-            )
-            pos = j + self.holdoff
-            if pos >= n_lags:
-                return out, lo + pos
 
-    def _first_arrival(self, z, amp, hit, j0: int, strongest: int) -> int:
-        """Earliest distinct peak in [j0, strongest) strong enough to be the direct path.
+        def first_arrival(j0: int, strongest: int) -> int:
+            return _first_distinct_peak(amp, hit, j0, strongest, fraction=self.first_path_fraction,
+                                        half_lobe=self.half_lobe, gap=2 * self.half_lobe)
 
-        A distinct peak is the maximum over ±half a symbol and lies at least one
-        symbol before the strongest: closer paths are not resolved (noise on
-        the main lobe's flank must not pass for an earlier path).
-        """
-        floor = self.first_path_fraction * amp[strongest]
-        w = self.half_lobe
-        for j in range(j0, strongest - 2 * w + 1):
-            if hit[j] and amp[j] >= floor and amp[j] >= np.max(amp[max(0, j - w) : j + w + 1]):
-                return j
-        return strongest
+        picks, resume = _cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
+                                           holdoff=self.holdoff, final=final, first_arrival=first_arrival)
+        return [Detection(t_start_s=(lo + j) / self.fs - self.tau_a_s, doppler_hz=float(self.doppler_hz[best[j]]),
+                          z=float(z[j]), rho=float(rho[j])) for j, _ in picks], resume

@@ -49,7 +49,7 @@ import scipy.fft
 from ..dsp import lowpass_taps
 from ..errors import ConfigError
 from ..transmit.reference import ReferenceBound, ReferenceWaveform, Replica, reference_crlb
-from .detect import z_threshold
+from .detect import _cluster_crossings, _first_distinct_peak, z_threshold
 from .doppler import dichotomy_max
 from .frontend import FrontEnd, FrontEndPlan, _Branch
 from .records import MeasurementRecord
@@ -309,38 +309,24 @@ class ReferenceDetector:
         window = (energy[self.length :] - energy[: len(energy) - self.length])[: len(z)]
         rho = peak / (self.energy[best] * np.maximum(window, np.finfo(float).tiny))
         amp = np.sqrt(peak)
-        n_lags = len(z)
         hit = (z >= self.eta) & (rho >= self.min_rho)
-        out = []
-        pos = max(scan_from - lo, 0)
-        while True:
-            hits = np.flatnonzero(hit[pos:])
-            if hits.size == 0:
-                return out, lo + n_lags if n_lags > pos else scan_from
-            j0 = pos + int(hits[0])
-            end = j0 + self.window
-            if end >= n_lags and not final:
-                return out, lo + j0
-            end = min(end, n_lags - 1)
-            strongest = j0 + int(np.argmax(np.where(hit[j0 : end + 1], amp[j0 : end + 1], 0.0)))
+
+        def first_arrival(j0: int, strongest: int) -> int:
             # earlier paths are sought in the strongest path's own bin: another bin peaks earlier on the
             # delay–Doppler ridge of a chirp, which must not pass for an earlier arrival
             b = int(best[strongest])
-            own = np.sqrt(power[b].astype(np.float64))
             own_hit = hit & (power[b] / noise >= self.eta)
-            j = self._first_arrival(own, own_hit, j0, strongest)
-            out.append(ReferenceDetection((lo + j) / self.fs, float(self.eps[b]), float(power[b, j] / noise), float(rho[j])))
-            pos = j + self.holdoff
-            if pos >= n_lags:
-                return out, lo + pos
+            return _first_distinct_peak(np.sqrt(power[b].astype(np.float64)), own_hit, j0, strongest,
+                                        fraction=self.first_path_fraction, half_lobe=self.half_lobe,
+                                        gap=self.half_lobe + 1)
 
-    def _first_arrival(self, amp, hit, j0: int, strongest: int) -> int:
-        floor = self.first_path_fraction * amp[strongest]
-        w = self.half_lobe
-        for j in range(j0, strongest - w):
-            if hit[j] and amp[j] >= floor and amp[j] >= np.max(amp[max(0, j - w) : j + w + 1]):
-                return j
-        return strongest
+        picks, resume = _cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
+                                           holdoff=self.holdoff, final=final, first_arrival=first_arrival)
+        out = []
+        for j, strongest in picks:
+            b = int(best[strongest])
+            out.append(ReferenceDetection((lo + j) / self.fs, float(self.eps[b]), float(power[b, j] / noise), float(rho[j])))
+        return out, resume
 
 
 @dataclass(frozen=True)
