@@ -118,6 +118,17 @@ def _median_z(err, sigma):
     return float(np.median(np.abs(err) / sigma))
 
 
+def _write_results(lines: list[str], path: Path, default_name: str | None = None) -> int:
+    """Print a table and write it to ``path``; ``default_name`` replaces the main table's file name when path is it."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if default_name is not None and path == RESULTS:
+        path = RESULTS.with_name(default_name)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=100)
@@ -194,11 +205,7 @@ def main(argv=None):
                "100 fail to decode and fall back to the tone or a fit on decisions (tens to 180 mm/s off, with σ to "
                "match), it is far below 0.5 while those frames are within 3σ. median abs(error)/σ is 0.67 for a "
                "calibrated Gaussian σ however σ varies between frames (a blanket factor k makes it 0.67/k).")
-    text = "\n".join(out) + "\n"
-    print(text)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text, encoding="utf-8")
-    return 0
+    return _write_results(out, args.out)
 
 
 def _speed(path: Path, n: int = 30) -> int:
@@ -223,12 +230,7 @@ def _speed(path: Path, n: int = 30) -> int:
                 what = "measurement and decoding" if decode else "measurement only"
                 lines.append(f"| {label} | {period:g} | {what} | {duration / wall:.1f}x | {duration / cpu:.1f}x | "
                              f"{1e3 * cpu / n:.0f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    path = path if path != RESULTS else RESULTS.with_name("bench_doppler_paths_speed.txt")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return 0
+    return _write_results(lines, path, "bench_doppler_paths_speed.txt")
 
 
 def _false_alarms(path: Path, minutes: float = 10.0) -> int:
@@ -252,12 +254,7 @@ def _false_alarms(path: Path, minutes: float = 10.0) -> int:
         wall = time.perf_counter() - t0
         blanked = rx._blanker.n_blanked / (n_blocks * int(FS)) if rx._blanker is not None else math.nan
         lines.append(f"| {label} | {minutes:g} | {len(found)} | {blanked:.1e} | {n_blocks / wall:.1f}x |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    path = path if path != RESULTS else RESULTS.with_name("bench_doppler_paths_false_alarms.txt")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return 0
+    return _write_results(lines, path, "bench_doppler_paths_false_alarms.txt")
 
 
 if __name__ == "__main__":
