@@ -34,6 +34,18 @@ def _speed_floor(text: str) -> float | None:
     return value
 
 
+def _add_inertial_options(parser: argparse.ArgumentParser) -> None:
+    """The inertial filter's --window and --min-speed, shared by nav simulate and nav track."""
+    parser.add_argument("--window", type=float, default=120.0, metavar="S",
+                        help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve "
+                             "the last S seconds by Gauss-Newton and continue from the result (default 120; 0: off, "
+                             "the plain filter)")
+    parser.add_argument("--min-speed", type=_speed_floor, default=0.0, metavar="MPS",
+                        help="the filter's speed floor [m/s]: an estimated speed below it is projected onto it (the "
+                             "vehicle moves forward; range and v_r cannot tell it from one backing along the "
+                             "reflected track; default 0; 'none': no floor)")
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("nav", help="navigation: Monte Carlo of paper 000, or a track from measurement records",
                        description="Single-beacon navigation with the papers' estimators.")
@@ -83,14 +95,7 @@ def add_parser(sub) -> None:
     s.add_argument("--gate", type=float, choices=(0.99, 0.999, 0.9999, 0.99999), metavar="P",
                    help="chi2 gate of the inertial filter's acoustic updates (default none: the simulated "
                         "measurements have no outliers; nav track gates records at 0.9999)")
-    s.add_argument("--window", type=float, default=120.0, metavar="S",
-                   help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve the last S "
-                        "seconds by Gauss-Newton and continue from the result (default 120; 0: off, the plain "
-                        "filter)")
-    s.add_argument("--min-speed", type=_speed_floor, default=0.0, metavar="MPS",
-                   help="the filter's speed floor [m/s]: an estimated speed below it is projected onto it (the vehicle "
-                        "moves forward; range and v_r cannot tell it from one backing along the reflected track; "
-                        "default 0; 'none': no floor)")
+    _add_inertial_options(s)
     s.add_argument("--matched-r", action="store_true",
                    help="set the filter's R for range and v_r to the emulated variances (default: eq 25's 12 and 0.2)")
     s.add_argument("--q", type=float, metavar="VAR",
@@ -178,14 +183,7 @@ def add_parser(sub) -> None:
                    help="white noise of the heading sensor [deg] (default 1)")
     t.add_argument("--bias-instability-deg-h", type=float, metavar="DEG/H",
                    help="heading bias random walk, as degrees after one hour (default 5)")
-    t.add_argument("--window", type=float, default=120.0, metavar="S",
-                   help="after a frame the filter finds improbable (NIS above its chi2 0.99 quantile), re-solve the last S "
-                        "seconds by Gauss-Newton and continue from the result (default 120; 0: off, the plain "
-                        "filter)")
-    t.add_argument("--min-speed", type=_speed_floor, default=0.0, metavar="MPS",
-                   help="the filter's speed floor [m/s]: an estimated speed below it is projected onto it (the vehicle "
-                        "moves forward; range and v_r cannot tell it from one backing along the reflected track; "
-                        "default 0; 'none': no floor)")
+    _add_inertial_options(t)
     t.add_argument("--estimate", nargs="+", choices=("bias-drift", "current", "range-scale"), default=(),
                    metavar="STATE",
                    help="extra states of the inertial filter: bias-drift, current (2 states), range-scale")

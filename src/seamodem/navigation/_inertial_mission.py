@@ -16,22 +16,8 @@ from numba import njit
 
 from .imu import bias_step, imu_reading
 from .inertial import (WINDOW_ITERATIONS, _cartesian, _floor_speed, _gated_acoustic, _gated_bearing, _predict,
-                       _relinearize_window, _to_internal, _update_heading, _window_start, _wrap)
+                       _record_prior, _relinearize_window, _to_internal, _update_heading, _window_start, _wrap)
 from .vehicle import feedback_command, vehicle_step
-
-
-@njit(cache=True, nogil=True)
-def _record(k, z, P, F, lay, states, history, charts):
-    """Node k's prior (state, covariance, F from node k − 1; F None at node 0) into filter_nodes' history."""
-    m = z.shape[0]
-    charts[k] = lay[4]
-    states[k] = z
-    for a in range(m):
-        history[k, a, 0] = z[a]
-        for b in range(m):
-            history[k, a, 1 + b] = P[a, b]
-            history[k, a, m + 1 + b] = P[a, b]
-            history[k, a, 2 * m + 1 + b] = (1.0 if a == b else 0.0) if F is None else F[a, b]
 
 
 @njit(cache=True, nogil=True)
@@ -109,7 +95,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
     sensors[0, 1] = sensors[0, 2] = 0.0
     sensors[0, 3] = sensors[0, 4] = np.nan
     if window:
-        _record(0, z, P, None, lay, states, history, charts)
+        _record_prior(0, z, P, None, lay, states, history, charts)
     ex, ey = _cartesian(z, lay, beacon)
     estimate[0, 0], estimate[0, 1] = ex, ey
     truth[0, 0], truth[0, 1] = x, y
@@ -133,7 +119,7 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
         sensors[k, 3] = sensors[k, 4] = sensors[k, 5] = np.nan
         _predict(z, P, lay, beacon, qd, omega_m, accel_m, dt, zp, F, A, Pp)
         if window:
-            _record(k, z, P, F, lay, states, history, charts)
+            _record_prior(k, z, P, F, lay, states, history, charts)
         if k % com_every == 0:
             dx, dy = x - beacon[0], y - beacon[1]
             d_true = np.sqrt(dx * dx + dy * dy)
@@ -162,8 +148,8 @@ def inertial_mission_kernel(reference, noise, start, start_offsets, sigmas, beac
             if k % com_every == 0 and status[k] != 2:
                 used_frame[k] = True
                 meas_n[k, 0], meas_n[k, 1] = sensors[k, 3], sensors[k, 4]
-                i0 = _window_start(k, dts, window_s)
-                if nis_out[k] > window_nis and i0 < k:
+                i0 = _window_start(k, dts, window_s) if nis_out[k] > window_nis else k
+                if i0 < k:
                     _relinearize_window(i0, k, states, history, charts, lay, qd, beacon, dts, sensors[:, 1],
                                         sensors[:, 2], has_heading, sensors[:, 0], heading_var_n, used_frame, meas_n,
                                         meas_var_n, True, use_vr, no_fix, fix_n, fix_var_n, used_bearing,

@@ -966,6 +966,22 @@ def _relinearize_window(i0, i, states, history, charts, lay, qd, beacon, dt, ome
 
 
 @njit(cache=True, nogil=True)
+def _record_prior(k, z, P, F, lay, states, history, charts):
+    """Node k's prior into ``history`` (state, covariance, F from node k − 1; ``F`` None: identity, node 0),
+    its chart into ``charts``; ``states[k]`` and the posterior covariance slot hold the prior until the node's
+    updates overwrite them."""
+    m = z.shape[0]
+    charts[k] = lay[4]
+    states[k] = z
+    for a in range(m):
+        history[k, a, 0] = z[a]
+        for b in range(m):
+            history[k, a, 1 + b] = P[a, b]
+            history[k, a, m + 1 + b] = P[a, b]
+            history[k, a, 2 * m + 1 + b] = (1.0 if a == b else 0.0) if F is None else F[a, b]
+
+
+@njit(cache=True, nogil=True)
 def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading, heading_var, has_acoustic,
                  meas, meas_var, use_range, use_vr, gate, gate_reset_after, iterations, second_order, has_fix, fix,
                  fix_var, has_bearing, bearing, bearing_var, gate_bearing, history, window_s, window_nis, v_floor):
@@ -1026,16 +1042,9 @@ def filter_nodes(z0, P0, lay, qd, beacon, dt, omega, accel, has_heading, heading
     for i in range(N):
         if i > 0:
             _predict(z, P, lay, beacon, qd, omega[i], accel[i], dt[i], zp, F, A, Pp)
+            _record_prior(i, z, P, F, lay, states, history, charts)
         else:
-            for a in range(n):
-                for b in range(n):
-                    F[a, b] = 1.0 if a == b else 0.0
-        charts[i] = lay[4]
-        for a in range(n):
-            history[i, a, 0] = z[a]
-            for b in range(n):
-                history[i, a, 1 + b] = P[a, b]
-                history[i, a, 2 * n + 1 + b] = F[a, b]
+            _record_prior(i, z, P, None, lay, states, history, charts)
         if has_acoustic[i]:
             nis_out[i], status[i], gated_run = _gated_acoustic(z, P, lay, beacon, meas[i], meas_var[i], use_range,
                                                                use_vr, gate, gate_reset_after, gated_run, iterations,
