@@ -324,3 +324,41 @@ def test_cli_reads_bearing_columns_and_writes_their_status(files, capsys):
     assert cli(d, "--depth", "12", "2", "--no-bearing", out="plain.csv") == 0
     with open(d / "plain_frames.csv") as f:
         assert "bearing_status" not in next(csv.reader(f))
+
+
+@pytest.mark.parametrize("option, value, message", [("--min-speed", "abc", "--min-speed: must be a speed in m/s or 'none'"),
+                                                    ("--window", "-1", "window_s: must be finite and >= 0 s")])
+def test_cli_bad_filter_option_is_one_line_error_and_no_output(files, capsys, option, value, message):
+    d = files
+    try:
+        code = cli(d, option, value)
+    except SystemExit as exc:  # argparse's own type errors
+        code = exc.code
+    assert code == 2
+    err = [line for line in capsys.readouterr().err.strip().splitlines() if not line.startswith(" ")]
+    assert message in err[-1] and "Traceback" not in "\n".join(err)
+    assert not (d / "track.csv").exists()
+
+
+def test_cli_min_speed_reaches_the_filter(files):
+    """--min-speed none and a value land in the sidecar's filter settings."""
+    d = files
+    assert cli(d, "--min-speed", "none", out="free.csv") == 0
+    assert cli(d, "--min-speed", "0.2", out="floor.csv") == 0
+    sides = [json.loads((d / name).read_text()) for name in ("free.json", "floor.json")]
+    found = [_find_key(s, "min_speed_mps") for s in sides]
+    assert found == [None, 0.2], found
+
+
+def _find_key(obj, key):
+    if isinstance(obj, dict):
+        if key in obj:
+            return obj[key]
+        for v in obj.values():
+            r = _find_key(v, key)
+            if r is not _MISSING:
+                return r
+    return _MISSING
+
+
+_MISSING = object()
