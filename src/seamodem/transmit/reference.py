@@ -615,7 +615,13 @@ def load_references(spec: str) -> list[ReferenceWaveform]:
         for table in tables:
             if not isinstance(table, dict):
                 raise InputFileError(f"reference file {path}: each reference must be a table of parameters")
-            ref = ReferenceWaveform.from_dict(table)
+            try:
+                ref = ReferenceWaveform.from_dict(table)
+            except ConfigError as exc:
+                raise exc.in_file(f"reference file {path}") from None
+            except (TypeError, ValueError, OverflowError) as exc:  # a value of a type no check expected
+                raise ConfigError("reference", f"a value is of the wrong type ({exc})",
+                                  file=f"reference file {path}") from None
             if ref.kind == "template" and not Path(ref.file).is_absolute():
                 ref = dataclasses.replace(ref, file=str(path.parent / ref.file))
             refs.append(ref)
