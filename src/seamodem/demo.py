@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from .config import FrameConfig, get_preset
 from .errors import ConfigError
 from .plots import save_figure
@@ -703,9 +703,9 @@ def format_summary(summary: dict) -> str:
 
 
 def _figure(*args, **kwargs):
-    from .plots import _pyplot
+    from .plots import pyplot
 
-    return _pyplot().subplots(*args, **kwargs)
+    return pyplot().subplots(*args, **kwargs)
 
 
 def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: dict) -> None:
