@@ -5,14 +5,11 @@ as in :func:`seamodem.navigation._kernels.mission_kernel`, fed by the same
 standard normals (common random numbers with the paper's filters), plus two
 truths that kernel does not have: a water current and a range scale (a sound
 speed error). The filter is :mod:`.inertial`'s, step for step the same kernels
-as :func:`~seamodem.navigation.inertial.filter_nodes`: the tests hold the
+as :func:`~seamodem.navigation.inertial.filter.filter_nodes`: the tests hold the
 estimate equal to a filter pass over the recorded sensor streams.
 """
 
 from __future__ import annotations
-
-import numpy as np
-from numba import njit
 
 from typing import NamedTuple
 

@@ -184,8 +184,14 @@ def fixed_lag_smooth(run: FilterRun, *, lag_s: float) -> SmoothedTrack:
     Parameters
     ----------
     run : FilterRun
+        A filter pass (:func:`~seamodem.navigation.inertial.run_filter`).
     lag_s : float
         Latency bound [s], > 0. A lag of one frame period lets every dead-reckoned stretch see its next frame.
+
+    Returns
+    -------
+    SmoothedTrack
+        States (N, n) and covariances (N, n, n) at every node, with ``lag_s``.
 
     Notes
     -----
