@@ -118,9 +118,9 @@ def main():
         print(f"{e:>10.1f} {f:>10.3f}")
 
     if args.plot:
-        from seamodem.plots import _pyplot, save_figure
+        from seamodem.plots import pyplot, save_figure
 
-        plt = _pyplot()
+        plt = pyplot()
 
         fig, ax = plt.subplots(figsize=(7, 5), constrained_layout=True)
         fine = np.linspace(0, 10, 200)

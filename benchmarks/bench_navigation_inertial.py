@@ -205,7 +205,7 @@ def _causal_map(config, details, truth, k, start_at_truth):
 def _map_cost(run, track):
     """The smoother's objective, −2 log posterior up to a constant, at a Cartesian track (N, n): start prior,
     motion (process noise of the smoother's model), heading readings, range and v_r."""
-    from seamodem.navigation.inertial import _acoustic_model, _motion
+    from seamodem.navigation.inertial.models import acoustic_model, motion
     from seamodem.navigation.smoothing import SMOOTHER_POSITION_RW
 
     nodes, cfg = run.nodes, run.config
@@ -220,14 +220,14 @@ def _map_cost(run, track):
     h, H = np.empty(2), np.zeros((2, n))
     for i in range(len(nodes)):
         if i > 0:
-            _motion(track[i - 1], lay, nodes.omega[i], nodes.accel[i], nodes.dt_s[i], fx, F)
+            motion(track[i - 1], lay, nodes.omega[i], nodes.accel[i], nodes.dt_s[i], fx, F)
             d = track[i] - fx
             cost += float(np.sum(d * d / (qd * nodes.dt_s[i])))
         if run.has_heading[i]:
             nu = np.angle(np.exp(1j * (nodes.heading[i] - track[i, 2] - track[i, 4])))
             cost += nu * nu / nodes.heading_var[i]
         if nodes.has_acoustic[i] and run.status[i] != 2:
-            _acoustic_model(track[i], lay, run.beacon_xy, True, run.use_vr, h, H)
+            acoustic_model(track[i], lay, run.beacon_xy, True, run.use_vr, h, H)
             cost += float(np.sum((nodes.meas[i] - h) ** 2 / nodes.meas_var[i]))
     return cost
 

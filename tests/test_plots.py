@@ -2,11 +2,11 @@
 
 import pytest
 
-from seamodem.plots import _pyplot, save_figure
+from seamodem.plots import pyplot, save_figure
 
 
 def test_save_figure_writes_a_png_and_closes_the_figure(tmp_path):
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots()
     ax.plot([0, 1], [1, 0])
     path = tmp_path / "plot_without_suffix"
@@ -17,7 +17,7 @@ def test_save_figure_writes_a_png_and_closes_the_figure(tmp_path):
 
 
 def test_failed_save_leaves_no_file_and_the_old_one_intact(tmp_path):
-    plt = _pyplot()
+    plt = pyplot()
     path = tmp_path / "fig.png"
     path.write_bytes(b"previous figure")
     fig, _ = plt.subplots()

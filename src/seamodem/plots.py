@@ -9,10 +9,20 @@ import numpy as np
 from .config import FrameConfig
 from .errors import SeamodemError
 
-__all__ = ["plot_recording", "plot_recording_blocks", "envelope", "save_figure"]
+__all__ = ["plot_recording", "plot_recording_blocks", "envelope", "save_figure", "pyplot"]
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib's ``pyplot``, imported on first use after ``matplotlib.use("Agg", force=False)``.
+
+    Every figure of the package is drawn through it, so that importing a module
+    that can plot does not import matplotlib.
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -35,7 +45,7 @@ def save_figure(fig, path: str | Path, *, dpi: int = 100) -> None:
         with atomic_outputs(path) as (tmp,):
             fig.savefig(tmp, dpi=dpi, format="png")
     finally:
-        _pyplot().close(fig)
+        pyplot().close(fig)
 
 
 def envelope(x: np.ndarray, n_bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -210,7 +220,7 @@ def plot_recording_blocks(
     if pos != n_samples:
         raise SeamodemError(f"plot: the blocks held {pos} samples, not the {n_samples} announced")
 
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(10, 10), constrained_layout=True)
     f_khz = np.fft.rfftfreq(nperseg, 1.0 / fs) / 1e3
     pxx = psd_sum / max(psd_count, 1)

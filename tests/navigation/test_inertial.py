@@ -17,11 +17,6 @@ from seamodem.navigation.bearing import bearing_body, wrap_angle
 from seamodem.navigation.inertial import (
     InertialConfig,
     Nodes,
-    _acoustic_model,
-    _floor_speed,
-    _motion,
-    _update_acoustic,
-    _update_heading,
     add_bearings,
     add_fixes,
     build_nodes,
@@ -30,7 +25,10 @@ from seamodem.navigation.inertial import (
     to_cartesian,
 )
 from seamodem.navigation.montecarlo import MissionConfig, NoiseModel, mission_noise, simulate_inertial_mission
-from seamodem.navigation.smoothing import _rts, _rts_gains, batch_smooth, fixed_lag_smooth
+from seamodem.navigation.inertial.kernels import rts_backward, rts_gains
+from seamodem.navigation.inertial.models import acoustic_model, motion
+from seamodem.navigation.inertial.updates import floor_speed, update_acoustic, update_heading
+from seamodem.navigation.smoothing import batch_smooth, fixed_lag_smooth
 
 ALL = InertialConfig(estimate_bias_drift=True, estimate_current=True, estimate_range_scale=True,
                      coordinates="cartesian")
@@ -63,18 +61,18 @@ def test_jacobians_match_numerical_derivatives(cfg):
     z = _state(cfg, np.random.default_rng(1))
     n, lay = cfg.n_states, cfg.layout
     h, H = np.empty(2), np.zeros((2, n))
-    _acoustic_model(z, lay, BEACON, True, True, h, H)
+    acoustic_model(z, lay, BEACON, True, True, h, H)
     zo, F = np.empty(n), np.empty((n, n))
-    _motion(z, lay, 0.1, 0.05, 0.25, zo, F)
+    motion(z, lay, 0.1, 0.05, 0.25, zo, F)
     numH, numF = np.zeros((2, n)), np.zeros((n, n))
     for j in range(n):
         e = np.zeros(n)
         e[j] = 1e-6
         hp, hm, a, b = np.empty(2), np.empty(2), np.empty(n), np.empty(n)
-        _acoustic_model(z + e, lay, BEACON, True, True, hp, np.zeros((2, n)))
-        _acoustic_model(z - e, lay, BEACON, True, True, hm, np.zeros((2, n)))
-        _motion(z + e, lay, 0.1, 0.05, 0.25, a, np.empty((n, n)))
-        _motion(z - e, lay, 0.1, 0.05, 0.25, b, np.empty((n, n)))
+        acoustic_model(z + e, lay, BEACON, True, True, hp, np.zeros((2, n)))
+        acoustic_model(z - e, lay, BEACON, True, True, hm, np.zeros((2, n)))
+        motion(z + e, lay, 0.1, 0.05, 0.25, a, np.empty((n, n)))
+        motion(z - e, lay, 0.1, 0.05, 0.25, b, np.empty((n, n)))
         numH[:, j], numF[:, j] = (hp - hm) / 2e-6, (a - b) / 2e-6
     # central differences at step 1e-6 on O(100) values: truncation + rounding ≈ 1e-8
     assert np.abs(H - numH).max() < 1e-6 and np.abs(F - numF).max() < 1e-6
@@ -89,7 +87,7 @@ def test_closing_speed_sign_and_range_scale(coordinates):
         z[:2] = np.hypot(50.0, 100.0), np.arctan2(-100.0, -50.0)
     z[cfg.layout[2]] = 0.01
     h, H = np.empty(2), np.zeros((2, cfg.n_states))
-    _acoustic_model(z, cfg.layout, BEACON, True, True, h, H)
+    acoustic_model(z, cfg.layout, BEACON, True, True, h, H)
     assert h[0] == pytest.approx(1.01 * np.hypot(50, 100)) and h[1] == pytest.approx(1.01)  # closing: positive
 
 
@@ -101,7 +99,7 @@ def test_linear_updates_equal_the_textbook_kalman_update(cfg):
     P = A @ A.T + np.eye(n)
     z = _state(cfg, rng)
     zh, Ph = z.copy(), P.copy()
-    _update_heading(zh, Ph, 0.9, 1e-3, np.empty(n))
+    update_heading(zh, Ph, 0.9, 1e-3, np.empty(n))
     Hh = np.zeros((1, n))
     Hh[0, 2] = Hh[0, 4] = 1.0
     x_ref, P_ref, _ = kalman_update(z, P, np.array([0.9 - z[2] - z[4]]), Hh, np.array([[1e-3]]))
@@ -110,12 +108,12 @@ def test_linear_updates_equal_the_textbook_kalman_update(cfg):
     # covariance with the Jacobian at the updated state
     za, Pa = z.copy(), P.copy()
     meas, var = np.array([95.0, 0.4]), np.array([0.04, 0.01])
-    _update_acoustic(za, Pa, cfg.layout, BEACON, meas, var, True, True, 1e9, 1, False, np.empty((5, n)),
+    update_acoustic(za, Pa, cfg.layout, BEACON, meas, var, True, True, 1e9, 1, False, np.empty((5, n)),
                      np.zeros((2, n)), False)
     h, H = np.empty(2), np.zeros((2, n))
-    _acoustic_model(z, cfg.layout, BEACON, True, True, h, H)
+    acoustic_model(z, cfg.layout, BEACON, True, True, h, H)
     x_ref, _, _ = kalman_update(z, P, meas - h, H, np.diag(var))
-    _acoustic_model(x_ref, cfg.layout, BEACON, True, True, h, H)
+    acoustic_model(x_ref, cfg.layout, BEACON, True, True, h, H)
     S = H @ P @ H.T + np.diag(var)
     P_ref = P - P @ H.T @ np.linalg.solve(S, H @ P)
     assert np.allclose(za, x_ref, atol=1e-9) and np.allclose(Pa, P_ref, atol=1e-9)
@@ -134,20 +132,20 @@ def test_iterated_update_reaches_the_posterior_mode():
 
     def cost(x):
         h, H = np.empty(2), np.zeros((2, n))
-        _acoustic_model(x, cfg.layout, BEACON, True, True, h, H)
+        acoustic_model(x, cfg.layout, BEACON, True, True, h, H)
         return 0.5 * np.sum((meas - h) ** 2 / var) + 0.5 * (x - z) @ Pi @ (x - z)
 
     L = np.linalg.cholesky(Pi)
 
     def residuals(x):
         h, H = np.empty(2), np.zeros((2, n))
-        _acoustic_model(x, cfg.layout, BEACON, True, True, h, H)
+        acoustic_model(x, cfg.layout, BEACON, True, True, h, H)
         return np.r_[(meas - h) / np.sqrt(var), L.T @ (x - z)]
 
     best = least_squares(residuals, z, xtol=1e-15, ftol=1e-15, gtol=1e-15).x
     assert cost(best) <= minimize(cost, z, method="BFGS").fun + 1e-9
     zz = z.copy()
-    _update_acoustic(zz, P.copy(), cfg.layout, BEACON, meas, var, True, True, 1e9, 20, False, np.empty((5, n)),
+    update_acoustic(zz, P.copy(), cfg.layout, BEACON, meas, var, True, True, 1e9, 20, False, np.empty((5, n)),
                      np.zeros((2, n)), False)
     assert np.abs(zz - best).max() < 1e-7  # both converge on the same normal equations
 
@@ -237,8 +235,8 @@ def test_fixed_lag_limits_are_the_filter_and_the_rts_smoother():
     assert np.allclose(short.states, run.states) and np.allclose(short.covariances, run.covariances)
     long = fixed_lag_smooth(run, lag_s=1e6)
     xi, Pi = run.internal_states, run.internal_covariances  # in the filter's charts
-    C = _rts_gains(xi, Pi, run.prior_states, run.prior_covariances, run.transitions)
-    xs, Ps = _rts(xi, Pi, run.prior_states, run.prior_covariances, C)
+    C = rts_gains(xi, Pi, run.prior_states, run.prior_covariances, run.transitions)
+    xs, Ps = rts_backward(xi, Pi, run.prior_states, run.prior_covariances, C)
     assert np.allclose(long.internal_states, xs, atol=1e-9) and np.allclose(long.internal_covariances, Ps, atol=1e-9)
     with pytest.raises(ConfigError, match="lag_s"):
         fixed_lag_smooth(run, lag_s=0.0)
@@ -285,13 +283,13 @@ def test_batch_smoother_is_the_least_squares_solution(with_bearing):
         r = [L0.T @ (Z[0] - z0)]
         for k in range(1, N):
             f, F = np.empty(n), np.empty((n, n))
-            _motion(Z[k - 1], lay, omega[k], accel[k], dt, f, F)
+            motion(Z[k - 1], lay, omega[k], accel[k], dt, f, F)
             r.append((Z[k] - f) / np.sqrt(Q))
             if has_h[k]:
                 r.append([(heading[k] - Z[k, 2] - Z[k, 4]) / 1e-2])
             if nodes.has_acoustic[k]:
                 h, H = np.empty(2), np.zeros((2, n))
-                _acoustic_model(Z[k], lay, beacon, True, True, h, H)
+                acoustic_model(Z[k], lay, beacon, True, True, h, H)
                 r.append((nodes.meas[k] - h) / 1e-2)
             if nodes.has_bearing[k]:
                 r.append([wrap_angle(nodes.bearing[k] - bearing_body(Z[k, 0], Z[k, 1], Z[k, 2], beacon)) / 1e-2])
@@ -382,15 +380,15 @@ def test_speed_floor_is_the_constrained_estimate_of_least_distance():
                    constraints=[{"type": "eq", "fun": lambda x: x[3] - 0.1}], method="SLSQP",
                    options={"ftol": 1e-14, "maxiter": 200})
     got = z.copy()
-    assert _floor_speed(got, P, 0.1)
+    assert floor_speed(got, P, 0.1)
     np.testing.assert_allclose(got, ref.x, atol=1e-6)
     assert got[3] == 0.1
     above = z.copy()
     above[3] = 0.5
     kept = above.copy()
-    assert not _floor_speed(kept, P, 0.1)
+    assert not floor_speed(kept, P, 0.1)
     np.testing.assert_array_equal(kept, above)
-    assert not _floor_speed(got, P, -np.inf)
+    assert not floor_speed(got, P, -np.inf)
 
 
 def test_speed_floor_keeps_the_filter_off_the_backward_branch():

@@ -12,12 +12,8 @@ import numpy as np
 import pytest
 
 from seamodem.navigation.bearing import bearing_body, bearing_jacobian, wrap_angle
-from seamodem.navigation.inertial import (
-    InertialConfig,
-    _update_bearing,
-    add_bearings,
-    build_nodes,
-)
+from seamodem.navigation.inertial import InertialConfig, add_bearings, build_nodes
+from seamodem.navigation.inertial.updates import update_bearing
 from seamodem.navigation.montecarlo import MissionConfig, NoiseModel, mission_noise, simulate_inertial_mission
 
 BEACON = np.array([50.0, 100.0])
@@ -64,7 +60,7 @@ def test_bearing_update_is_the_textbook_update_of_the_independent_model(cfg):
     z_ref = z + K * wrap_angle(az - h0)
     P_ref = P - np.outer(K, K) * S
     zz, PP = z.copy(), P.copy()
-    nis, used = _update_bearing(zz, PP, cfg.layout, BEACON, z.copy(), az, var, np.inf, False, np.empty(6))
+    nis, used = update_bearing(zz, PP, cfg.layout, BEACON, z.copy(), az, var, np.inf, False, np.empty(6))
     assert used and np.isclose(nis, 0.03**2 / S)
     assert np.allclose(zz, z_ref, atol=1e-12) and np.allclose(PP, P_ref, atol=1e-12)
 
@@ -75,10 +71,10 @@ def test_bearing_innovation_wraps_and_the_gate_rejects_a_flipped_bearing():
     h0 = float(bearing_body(30.0, -20.0, 0.7, BEACON))
     near_pi = wrap_angle(h0 + 2 * np.pi - 1e-3)  # the same direction written 2π away
     zz, PP = z.copy(), P.copy()
-    nis, used = _update_bearing(zz, PP, POLAR.layout, BEACON, z.copy(), float(near_pi), 1e-4, 6.63, False, np.empty(6))
+    nis, used = update_bearing(zz, PP, POLAR.layout, BEACON, z.copy(), float(near_pi), 1e-4, 6.63, False, np.empty(6))
     assert used and nis < 0.01
     zz, PP = z.copy(), P.copy()
-    nis, used = _update_bearing(zz, PP, POLAR.layout, BEACON, z.copy(), h0 + np.pi, 1e-4, 6.63, False, np.empty(6))
+    nis, used = update_bearing(zz, PP, POLAR.layout, BEACON, z.copy(), h0 + np.pi, 1e-4, 6.63, False, np.empty(6))
     assert not used and nis > 1e3 and np.array_equal(zz, z)  # a front/back flip is gated, state untouched
 
 

@@ -32,7 +32,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import soundfile
 
-from .. import __version__
+from .._version import __version__
 from .._progress import progress_bar
 from ..config import FrameConfig
 from ..errors import ConfigError, InputFileError

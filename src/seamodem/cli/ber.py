@@ -153,10 +153,10 @@ def plot_ber(path, points, config, *, title: str = "") -> None:
     """BER (raw and decoded) and FER (DFE, turbo) against SNR, with the uncoded AWGN theory."""
     import numpy as np
 
-    from ..plots import _pyplot, save_figure
+    from ..plots import pyplot, save_figure
     from ..studies.ber import theory_ber
 
-    plt = _pyplot()
+    plt = pyplot()
     snr = np.array([p.snr_db for p in points])
     fine = np.linspace(snr.min() - 1, snr.max() + 1, 200)
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..plots import _pyplot, save_figure
+from ..plots import pyplot, save_figure
 
 __all__ = ["plot_top_view", "plot_error_curves", "plot_track", "error_ellipses"]
 
@@ -30,7 +30,7 @@ def plot_top_view(result, path: str | Path, *, filter: str | None = None, n_tcom
     (one went to (-1600, -500) m), and no mean of runs should be drawn beside it unannounced.
     """
     filter = filter or _filters_run(result)[0]
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 7))
     planned = result.config.reference()[0][:, :2]
     ax.plot(*planned.T, color="0.6", lw=3, alpha=0.6, label="planned path")
@@ -65,7 +65,7 @@ def plot_top_view(result, path: str | Path, *, filter: str | None = None, n_tcom
 
 def plot_error_curves(result, path: str | Path) -> None:
     """Fig. 8: run-averaged position error versus mission time, per T_com, one panel per estimator."""
-    plt = _pyplot()
+    plt = pyplot()
     filters = _filters_run(result)
     fig, axes = plt.subplots(len(filters), 1, figsize=(8, 3 * len(filters)), sharex=True, squeeze=False)
     axes = axes[:, 0]
@@ -157,7 +157,7 @@ def plot_track(t_s, estimate_xy, path: str | Path, *, beacon_xy, sigma_xy=None, 
     n_ellipses : int
         About this many ellipses, at evenly spaced estimates.
     """
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.patches import Ellipse
 
     estimate = np.asarray(estimate_xy, dtype=float)

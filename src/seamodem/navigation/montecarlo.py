@@ -26,7 +26,7 @@ from .imu import bias_step, imu_reading, imu_sigmas
 from .inertial import InertialConfig
 from .models import Auv6Model, closing_speed
 from .paper import EQ25_ORDER, EQ25_R, EQ25_R_DIAG, eq25_q
-from .smoother import rts_smooth
+from .ekf_smoother import rts_smooth
 from .trajectories import boustrophedon
 from .vehicle import feedback_command, vehicle_step
 
@@ -53,7 +53,7 @@ __all__ = [
 FILTERS = ("proposed", "rosb")
 
 #: The inertial filter (:mod:`.inertial`) with range and v_r, with range only, and its two smoothers
-#: (:mod:`.smoothing`, post-processing of the "inertial" mission: the vehicle steers on the filter).
+#: (:mod:`.inertial.smoothers`, post-processing of the "inertial" mission: the vehicle steers on the filter).
 INERTIAL_FILTERS = ("inertial", "inertial_range", "fixed_lag", "batch")
 
 #: Every estimator :func:`run_monte_carlo` can run, in table order.
@@ -205,7 +205,7 @@ class MissionConfig:
     error_of : {"estimate", "smoothed", "last_fix"}
         Which position the error is measured on: the filter's real-time estimate
         (paper 000), the Rauch–Tung–Striebel smoothed track (post-processing,
-        :mod:`~seamodem.navigation.smoother`; the controller still steers on the
+        :mod:`~seamodem.navigation.ekf_smoother`; the controller still steers on the
         filter), or the filter's position at the last frame held until the next
         one (a diagnostic: the error the paper's Table 3 is consistent with, see
         docs/navigation.md).
@@ -371,7 +371,8 @@ def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filte
     ``status`` and ``nis`` per step, the recorded ``sensors`` (n + 1, 6) and, for smoothers, the
     ``states`` and ``covariances`` of the output.
     """
-    from ._inertial_mission import inertial_mission_kernel
+    from ._inertial_mission import InertialMission, inertial_mission_kernel
+    from .inertial.driver import filter_model, filter_settings
 
     if filter not in INERTIAL_FILTERS:
         raise ConfigError("filter", f"must be one of {INERTIAL_FILTERS}, got {filter!r}")
@@ -393,23 +394,22 @@ def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filte
     sig = config.noise.sigmas(config.dt_s)
     meas_var = np.array([max(config.noise.sigma_range_m, 1e-6) ** 2, max(config.noise.sigma_vr_mps, 1e-6) ** 2])
     sensors = np.empty((n + 1, 6))
-    gate = icfg.gate[1 if use_vr else 0]
     bearing_sigma = math.radians(config.noise.sigma_bearing_deg)
     if bearing_sigma > 0 and config.com_every < 2:
         raise ConfigError("sigma_bearing_deg", "a bearing needs T_com of at least two IMU steps (its noise is drawn "
                                                f"from the step before the frame), got T_com {config.tcom_s} s")
+    mission = InertialMission(reference, noise, start, offsets, sig, config.dt_s, config.com_every,
+                              config.steer_on_estimate, config.v_min_mps, config.v_max_mps, config.omega_max_rad_s,
+                              config.accel_max_mps2, np.asarray(config.current_mps, dtype=float), config.range_scale,
+                              config.noise.bias_rate(noise), bearing_sigma, icfg.heading_sigma_rad**2, meas_var)
     error, estimate, truth, status, nis = inertial_mission_kernel(
-        reference, noise, start, offsets, sig, np.asarray(config.beacon_xy, dtype=float), config.dt_s,
-        config.com_every, use_vr, config.steer_on_estimate, config.v_min_mps, config.v_max_mps,
-        config.omega_max_rad_s, config.accel_max_mps2, np.asarray(config.current_mps, dtype=float),
-        config.range_scale, config.noise.bias_rate(noise), z0, P0, icfg.layout, icfg.process_density,
-        icfg.heading_sigma_rad**2, meas_var, gate, icfg.gate_reset_after, icfg.iterations, icfg.second_order,
-        bearing_sigma, icfg.gate[0], *icfg.window(2 if use_vr else 1), icfg.speed_floor, sensors)
+        mission, z0, P0, icfg.layout, filter_model(icfg, config.beacon_xy, use_range=True, use_vr=use_vr),
+        filter_settings(icfg, use_range=True, use_vr=use_vr), sensors)
     details = {"status": status, "nis": nis, "sensors": sensors}
     if filter in ("inertial", "inertial_range"):
         return error, estimate, truth, details
     from .inertial import add_bearings, build_nodes, run_filter
-    from .smoothing import batch_smooth, fixed_lag_smooth
+    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
 
     t = np.arange(n + 1) * config.dt_s
     frames = np.isfinite(sensors[:, 3])

@@ -7,8 +7,8 @@ Four filters:
   noise from their noise densities, the heading sensor measures heading + bias, the bias is
   a state, each acoustic frame (range and v_r) is an iterated update gated on its
   normalised innovation (a gated frame is reported in the frame table, not used).
-  Optionally smoothed over the whole mission (:func:`~.smoothing.batch_smooth`) or over a
-  fixed lag (:func:`~.smoothing.fixed_lag_smooth`).
+  Optionally smoothed over the whole mission (:func:`~.inertial.smoothers.batch_smooth`) or over a
+  fixed lag (:func:`~.inertial.smoothers.fixed_lag_smooth`).
 - ``"inertial-range"``: the same with range only (no v_r update).
 - ``"proposed"``, ``"rosb"``: paper 000's 6-state EKF with and without v_r, with its
   R (eq 25) and Q = Δt⁸: kept exactly as published so that Tables 3-4 stay
@@ -67,7 +67,7 @@ from .logs import (LogWarning, depth_at, parse_pair as _pair, parse_position, re
                    read_fixes, read_imu, read_measurements)
 from .models import Auv6Model
 from .paper import EQ25_R, eq25_q, eq25_r_text
-from .smoother import rts_smooth
+from .ekf_smoother import rts_smooth
 
 __all__ = ["MEASUREMENT_COLUMNS", "IMU_COLUMNS", "FILTERS", "SMOOTHERS", "RANGE_FLOOR_M", "V_R_FLOOR_MPS",
            "DEFAULT_SIGMA_RANGE_M", "DEFAULT_SIGMA_V_R_MPS", "BEARING_FLOOR_RAD", "FRAME_STATUS", "read_columns", "run_track",
@@ -256,7 +256,7 @@ def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, 
                     range_floor_m, v_r_floor_mps, sigma_range_m, sigma_v_r_mps, start_sigma_m, fixes, filter,
                     depths, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
     from .inertial import InertialConfig, add_bearings, add_fixes, build_nodes, run_filter, state_names
-    from .smoothing import batch_smooth, fixed_lag_smooth
+    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
 
     for name, value in (("range_floor_m", range_floor_m), ("v_r_floor_mps", v_r_floor_mps)):
         if not (value is not None and math.isfinite(value) and value >= 0):
@@ -377,7 +377,7 @@ def _paper_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=
         Vehicle and beacon depths [m]: slant ranges become horizontal (paper 004 eq 10).
     smooth : bool
         Replace the filtered states by the Rauch–Tung–Striebel smoothed ones
-        (:func:`~seamodem.navigation.smoother.rts_smooth`): each state then uses
+        (:func:`~seamodem.navigation.ekf_smoother.rts_smooth`): each state then uses
         the frames after it as well (post-processing, not real time).
 
     Returns

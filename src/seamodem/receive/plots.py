@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import FrameConfig
-from ..plots import _pyplot, save_figure
+from ..plots import pyplot, save_figure
 from .compensate import compensate_frame
 from .doppler import pilot_correlation
 from .measure import FrameMeasurement
@@ -32,7 +32,7 @@ def plot_frame(
     estimate marked), the eq 9 v_r track with the three mean estimates, and
     the constellation before and after eq 10–11 compensation.
     """
-    plt = _pyplot()
+    plt = pyplot()
     T = config.symbol_period_s
     t_a = m.pilot.t_start_s
     offsets = np.linspace(-4 * T, 4 * T, 161)

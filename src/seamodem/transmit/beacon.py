@@ -14,7 +14,7 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from .._progress import progress_bar
 from ..config import DEFAULT_PAYLOAD_TEXT, FrameConfig
 from ..errors import ConfigError, InputFileError, PayloadError

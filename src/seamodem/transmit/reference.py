@@ -731,7 +731,7 @@ def write_reference_beacon(
     ConfigError
         Bad schedule, overlapping emissions, a band above fs/2.
     """
-    from .. import __version__
+    from .._version import __version__
     from ..io.files import atomic_outputs
     from ..io.sidecar import write_json
     from ..io.wav import write_wav_blocks
