@@ -1127,8 +1127,8 @@ def receive_array(
     doas : list of DoaEstimate or None
         One per record (None without a direction).
     """
-    from .measure import NOISE_WINDOW_S, frame_span_s
-    from .stream import Receiver, _Buffers, _one_blas_thread
+    from .frame import BasebandBuffers, FrameMeasurer, one_blas_thread
+    from .measure import NOISE_WINDOW_S
 
     x = np.asarray(x, float)
     if x.ndim != 2 or x.shape[1] < 2:
@@ -1142,7 +1142,7 @@ def receive_array(
     aperture_m = float(np.max(np.linalg.norm(positions_m[:, None] - positions_m[None], axis=-1)))
     spread = math.ceil(aperture_m / c * fs) + 1  # a click's spread over the elements [samples]
     # one BLAS thread for the whole pass (the per-frame work is many small products: receive/stream.py _one_blas_thread)
-    with _one_blas_thread():
+    with one_blas_thread():
         plan, bb, tone, blanker = front_end_array(x, fs, config, s, reference_channel, spread)
         if complex_gains is not None:
             g = np.asarray(complex_gains, complex)[None, :]
@@ -1150,9 +1150,9 @@ def receive_array(
         det = ArrayDetector(config, plan.fs_data, x.shape[1], v_max_mps=s.v_max_mps, sound_speed_mps=c,
                             false_alarms_per_hour=s.false_alarms_per_hour, pilot=pilot)
         detections = det.find_all(bb)
-        rx = Receiver(config, emissions=emissions, settings=s, pilot=pilot, payloads=payloads)
-        rx.plan, rx.detector, rx._blanker = plan, det.base, blanker
-        span = frame_span_s(config, v_max_mps=s.v_max_mps, sound_speed_mps=c)
+        measurer = FrameMeasurer(config, plan, emissions=emissions, settings=s, pilot=pilot, payloads=payloads,
+                                 blanker=blanker)
+        span = measurer.span_s
         y_bb, y_tone = bb[:, reference_channel].copy(), tone[:, reference_channel].copy()
         f_data, f_tone = plan.data.centre_hz, plan.tone.centre_hz
         records: list[MeasurementRecord] = []
@@ -1177,22 +1177,21 @@ def receive_array(
                 _splice(y_bb, bb, plan.fs_data, f_data, t_a - COMBINE_PAD_S, t_end, rel, w)
                 _splice(y_tone, tone, plan.fs_tone, f_tone, t_a - COMBINE_PAD_S, t_end, rel, w)
             # the measurement sees the frame's neighbourhood only, as in the streaming receiver's buffers
-            state = _Buffers()
             t_lo, t_hi = d.t_start_s - 2 * COMBINE_PAD_S - NOISE_WINDOW_S, d.t_start_s + span + COMBINE_PAD_S
-            state.bb_start = max(0, math.floor(t_lo * plan.fs_data))
-            state.tone_start = max(0, math.floor(t_lo * plan.fs_tone))
-            state.bb = y_bb[state.bb_start: max(state.bb_start, math.ceil(t_hi * plan.fs_data))]
-            state.tone = y_tone[state.tone_start: max(state.tone_start, math.ceil(t_hi * plan.fs_tone))]
-            for rec in rx._measure_ready([d], state, plan, span, final=True):
-                if doa is None:
-                    records.append(rec)
-                    out_doas.append(None)
-                    continue
-                records.append(dataclasses.replace(
-                    rec, azimuth_body_rad=doa.azimuth_rad, elevation_body_rad=doa.elevation_rad,
-                    sigma_azimuth_body_rad=doa.sigma_azimuth_rad, sigma_elevation_body_rad=doa.sigma_elevation_rad,
-                    n_channels=int(x.shape[1])))
-                out_doas.append(doa)
+            i_bb, i_tone = max(0, math.floor(t_lo * plan.fs_data)), max(0, math.floor(t_lo * plan.fs_tone))
+            window = BasebandBuffers(y_bb[i_bb: max(i_bb, math.ceil(t_hi * plan.fs_data))],
+                                     y_tone[i_tone: max(i_tone, math.ceil(t_hi * plan.fs_tone))],
+                                     bb_start=i_bb, tone_start=i_tone)
+            rec = measurer.measure(d, window)
+            if doa is None:
+                records.append(rec)
+                out_doas.append(None)
+                continue
+            records.append(dataclasses.replace(
+                rec, azimuth_body_rad=doa.azimuth_rad, elevation_body_rad=doa.elevation_rad,
+                sigma_azimuth_body_rad=doa.sigma_azimuth_rad, sigma_elevation_body_rad=doa.sigma_elevation_rad,
+                n_channels=int(x.shape[1])))
+            out_doas.append(doa)
     return records, out_doas
 
 
