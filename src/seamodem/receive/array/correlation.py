@@ -122,7 +122,20 @@ class ArrayCorrelation:
         return float(np.sum(self.kernel))
 
     def without(self, lags_s: np.ndarray, amplitudes: np.ndarray) -> ArrayCorrelation:
-        """The correlations with paths (n_channels, n_paths) of those lags and amplitudes removed."""
+        """The correlations with paths of those lags and amplitudes removed.
+
+        Parameters
+        ----------
+        lags_s : numpy.ndarray, shape (n_channels,) or (n_channels, n_paths)
+            The paths' lags on each channel [s].
+        amplitudes : numpy.ndarray, same shape, complex
+            Their amplitudes (c / E).
+
+        Returns
+        -------
+        ArrayCorrelation
+            A copy with those paths' model subtracted from the spectra.
+        """
         lags = np.atleast_2d(np.asarray(lags_s, float).T).T
         amps = np.atleast_2d(np.asarray(amplitudes, complex).T).T
         model = np.einsum("kp,kpm->km", amps, np.exp(-2j * np.pi * lags[:, :, None] * self.freqs_hz[None, None, :]))
@@ -133,13 +146,34 @@ class ArrayCorrelation:
 
         The bins are placed relative to the lowest one (a baseband window's
         frequencies are offset by the carrier), so only the magnitude is c_k's.
+
+        Parameters
+        ----------
+        fs : float
+            The window's sample rate [Hz].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_channels, N)
+            |c_k(i/fs)|.
         """
         full = np.zeros((self.spectra.shape[0], self.n_fft), complex)
         full[:, np.rint((self.freqs_hz - self.freqs_hz[0]) * self.n_fft / fs).astype(int) % self.n_fft] = self.spectra
         return np.abs(np.fft.ifft(full, axis=1)) * self.n_fft
 
     def at(self, lags_s: np.ndarray) -> np.ndarray:
-        """c_k(δ_k) for one lag per channel (shape (n_channels,)) or a grid (n_channels, n_lags)."""
+        """c_k(δ) at any lags: one per channel, or a grid per channel.
+
+        Parameters
+        ----------
+        lags_s : numpy.ndarray, shape (n_channels,) or (n_channels, n_lags)
+            Lags δ [s] relative to ``t_arrival_s``.
+
+        Returns
+        -------
+        numpy.ndarray, complex, the shape of ``lags_s``
+            The correlations there.
+        """
         lags = np.asarray(lags_s, float)
         f = self.freqs_hz
         df = (f[-1] - f[0]) / max(len(f) - 1, 1)
@@ -178,12 +212,27 @@ def array_correlation(
     ----------
     x : numpy.ndarray, shape (n_samples, n_channels)
         Real passband channels; row i at time t0_s + i/fs [s].
+    fs : float
+        Their sample rate [Hz].
+    config : FrameConfig
+        The frame (pilot pulse, carrier, data band).
+    pilot : numpy.ndarray
+        Pilot symbols.
     t_arrival_s : float
         Frame start arrival on the reference channel [s] (lag 0).
     v_mps : float
         Closing speed the reference is scaled by [m/s].
+    sound_speed_mps : float
+        Sound speed c [m/s] (the scale 1 + v/c).
+    t0_s : float
+        Time of row 0 [s].
     complex_gains : numpy.ndarray, shape (n_channels,), optional
         Known channel gains (calibration), divided out.
+
+    Returns
+    -------
+    ArrayCorrelation
+        The frame's correlations and their noise variances.
 
     Raises
     ------
@@ -232,7 +281,7 @@ def baseband_correlation(
 ) -> ArrayCorrelation:
     """:func:`array_correlation` on the front end's decimated complex basebands (one FFT over all channels).
 
-    With x_pb = Re[x_bb e^{j2π fc t}] (:mod:`.frontend`), the analytic
+    With x_pb = Re[x_bb e^{j2π fc t}] (:mod:`seamodem.receive.frontend`), the analytic
     passband correlation is c_k(δ) = e^{j2π fc δ} Σ_n x_bb,k(t_n) r_bb*(t_n − δ),
     r_bb(t) = b(τ) e^{j2π (f0 τ − fc t)}, τ = (t − t_a)(1 + v/c): the spectra
     are those of the baseband window, their frequencies shifted up by fc, so
@@ -247,6 +296,13 @@ def baseband_correlation(
         Their rate [Hz].
     centre_hz : float
         The front end's mixing frequency fc [Hz].
+    config, pilot, t_arrival_s, v_mps, sound_speed_mps, t0_s
+        As :func:`array_correlation`.
+
+    Returns
+    -------
+    ArrayCorrelation
+        The frame's correlations (frequencies in passband) and their noise variances.
 
     Raises
     ------
@@ -283,5 +339,16 @@ def baseband_correlation(
 
 
 def fs_of(corr: ArrayCorrelation) -> float:
-    """Sample rate of the correlation window [Hz] (bin spacing × N)."""
+    """Sample rate of the correlation window [Hz] (bin spacing × N).
+
+    Parameters
+    ----------
+    corr : ArrayCorrelation
+        A frame's correlations.
+
+    Returns
+    -------
+    float
+        ``corr.fs_hz`` [Hz].
+    """
     return corr.fs_hz

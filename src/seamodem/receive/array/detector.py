@@ -75,6 +75,26 @@ class ArrayDetector:
     the 6 dB of a coherent sum).
     The ρ test, ≈ Kγ/(1 + Kγ) with γ the in-band SNR per element, moves from
     ≈ −9 dB per element (one hydrophone) to ≈ −9 − 10 log10 K dB.
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The transmitted frame.
+    fs : float
+        The data basebands' rate [Hz].
+    n_channels : int
+        Number of channels K.
+    **options
+        As :class:`~seamodem.receive.detect.PilotDetector` (v_max_mps,
+        sound_speed_mps, false_alarms_per_hour, pilot, ...:
+        :func:`~seamodem.receive.frame.detector_options`).
+
+    Attributes
+    ----------
+    base : PilotDetector
+        The single detector whose bank, rules and ``find`` run on the array's statistics.
+    eta : float
+        The threshold η_K on Z.
     """
 
     def __init__(self, config: FrameConfig, fs: float, n_channels: int, **options):
@@ -100,6 +120,22 @@ class ArrayDetector:
 
         ρ is computed at the local maxima of Z above η only (elsewhere 0: the
         lags the detector takes for arrivals and strongest paths are such maxima).
+
+        Parameters
+        ----------
+        r : numpy.ndarray, shape (n, n_channels), complex
+            Data-band basebands.
+
+        Returns
+        -------
+        z : numpy.ndarray, shape (n − L + 1,)
+            Z at each lag (L the pilot template's length).
+        rho : numpy.ndarray
+            ρ at each lag (0 away from Z's peaks above η).
+        best : numpy.ndarray of int
+            The Doppler bin of Z's maximum at each lag.
+        sqrt_z : numpy.ndarray
+            √Z.
         """
         import scipy.fft
 
@@ -176,7 +212,18 @@ class ArrayDetector:
         return out
 
     def find_all(self, bb: np.ndarray):
-        """Every detection in the basebands bb (n, K), scanned in chunks of DETECTION_CHUNK_S."""
+        """Every detection in the basebands, scanned in chunks of DETECTION_CHUNK_S (bounded memory).
+
+        Parameters
+        ----------
+        bb : numpy.ndarray, shape (n, n_channels), complex
+            Data-band basebands at the detector's rate, sample 0 at time 0.
+
+        Returns
+        -------
+        list of Detection
+            In order of arrival.
+        """
         b = self.base
         chunk = max(4 * b.length, int(DETECTION_CHUNK_S * b.fs))
         out, scan_from, end = [], 0, 0

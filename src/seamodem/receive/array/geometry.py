@@ -17,7 +17,18 @@ from ...errors import ConfigError
 
 
 def unit_vector(azimuth_rad, elevation_rad) -> np.ndarray:
-    """u = (cos e cos a, cos e sin a, sin e), shape (..., 3)."""
+    """The unit vector of a direction, u = (cos e cos a, cos e sin a, sin e).
+
+    Parameters
+    ----------
+    azimuth_rad, elevation_rad : float or numpy.ndarray
+        Azimuth a and elevation e [rad] (broadcast together).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        u in the body frame (x forward, y port, z up).
+    """
     a, e = np.asarray(azimuth_rad, float), np.asarray(elevation_rad, float)
     return np.stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)], axis=-1)
 
@@ -68,6 +79,19 @@ _ASSUMPTIONS = {"planar": ("below", "above"), "linear": ("port", "starboard")}
 
 def array_geometry(positions_m, assume: str | None = None) -> ArrayGeometry:
     """Classify element positions for direction finding (volume, planar, linear) and check the assumption.
+
+    Parameters
+    ----------
+    positions_m : array_like, shape (n, 3)
+        Element positions in the body frame [m].
+    assume : str, optional
+        Planar: "below" (default) or "above"; linear: "port" (default) or
+        "starboard"; none for a volume array.
+
+    Returns
+    -------
+    ArrayGeometry
+        The positions, their kind, axis and the assumption taken.
 
     Raises
     ------
