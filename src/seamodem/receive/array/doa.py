@@ -140,7 +140,7 @@ def estimate_doa(
     position_sigma_m: float = 0.0,
     assume: str | None = None,
 ) -> DoaEstimate:
-    """The direct path's direction of arrival from one frame's correlations (:mod:`seamodem.receive.array`, steps 1–3).
+    """Direction of arrival of the direct path from one frame's correlations (:mod:`seamodem.receive.array`, steps 1–3).
 
     Parameters
     ----------
