@@ -252,7 +252,7 @@ def _false_alarms(path: Path, minutes: float = 10.0) -> int:
         t0 = time.perf_counter()
         found = list(rx.run(blocks, fs=FS))
         wall = time.perf_counter() - t0
-        blanked = rx._blanker.n_blanked / (n_blocks * int(FS)) if rx._blanker is not None else math.nan
+        blanked = rx.blanker.n_blanked / (n_blocks * int(FS)) if rx.blanker is not None else math.nan
         lines.append(f"| {label} | {minutes:g} | {len(found)} | {blanked:.1e} | {n_blocks / wall:.1f}x |")
     return _write_results(lines, path, "bench_doppler_paths_false_alarms.txt")
 

@@ -49,16 +49,19 @@ def test_bank_doppler_is_the_direct_paths(paths):
 
 
 def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_dbhz=30.0, es_n0=1.0):
-    """Receiver._doppler's choice for a frame whose CRC failed and whose decisions fit is given."""
+    """FrameMeasurer._doppler's choice for a frame whose CRC failed and whose decisions fit is given."""
     from types import SimpleNamespace
 
+    from seamodem.receive.frame import FrameMeasurer
+    from seamodem.receive.frontend import plan_front_end
     from seamodem.receive.wholeframe import WholeFrameFit
 
     one = np.ones(1)
     wf = WholeFrameFit(delays_s=np.array([0.1]), amplitudes=one + 0j, v_mps=np.array([v_fit]), accel_mps2=0 * one,
                        sigma_v_mps=np.array([sigma_fit]), crlb_v_mps=np.array([sigma_fit]), es_n0=es_n0 * one,
                        sigma_delay_s=np.array([1e-6]), n_reference=1000)
-    rx = Receiver(CFG, emissions=Emissions(times_s=[0.0]))
+    rx = FrameMeasurer(CFG, plan_front_end(CFG, FS, v_max_mps=5.0, sound_speed_mps=1500.0),
+                       emissions=Emissions(times_s=[0.0]))
     rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions")
     m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10)),
                         pilot=SimpleNamespace(snr_db=snr_db, v_mps=v_bank), paths=SimpleNamespace(delays_s=one))

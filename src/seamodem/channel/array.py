@@ -409,7 +409,7 @@ def simulate_array(
     them, are common to all elements (they are centimetres apart).
     """
     from .model import build_model
-    from .simulate import _ArrayInput, _ArrayScratch, _render, make_noise_source
+    from .simulate import ArrayInput, ArrayScratch, make_noise_source, render_channel
     from .truth import frame_truth, in_band_power
 
     if scenario.mode != "geometry":
@@ -421,7 +421,7 @@ def simulate_array(
     fs = float(fs)
     band_hz = tuple(band_hz)
     model = build_model(scenario, reference_frequency_hz=reference_frequency_hz or 0.5 * sum(band_hz))
-    source = _ArrayInput(x)
+    source = ArrayInput(x)
     t_start = float(model.clock.to_true(0.0))
     seeds = np.random.SeedSequence(scenario.seed).spawn(2 + array.n_elements)
     base = model.trajectory
@@ -440,8 +440,8 @@ def simulate_array(
     out = np.zeros((n_out, array.n_elements))
     for k, m in enumerate(elements):
         m.fluctuations = model.fluctuations
-        scratch = _ArrayScratch(n_out)
-        _render(m, source, fs, n_out, scratch, False)
+        scratch = ArrayScratch(n_out)
+        render_channel(m, source, fs, n_out, scratch, False)
         out[:, k] = _mismatch(scratch.data, array.complex_gains[k])
         if truth:
             ta = frame_truth(m, list(t_emit_s), frame_duration_s)

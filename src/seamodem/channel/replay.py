@@ -39,7 +39,7 @@ from scipy.interpolate import CubicSpline
 from ..errors import ConfigError, InputFileError
 from ..io.files import check_writable
 from .scenario import Scenario
-from .simulate import _ArrayScratch, _noise_pass, read_input, write_outputs
+from .simulate import ArrayScratch, noise_pass, read_input, write_outputs
 
 __all__ = ["ReplayChannel", "read_replay_channel", "replay", "replay_file"]
 
@@ -264,9 +264,9 @@ def replay_file(in_wav, scenario: Scenario, out_wav, *, command: str = "", progr
     def produce(fin, sink, make_scratch):
         x = fin.read(dtype="float64", always_2d=True)[:, 0]
         y = replay(x, fs, channel, receiver=rp.receiver, start_s=rp.start_s)
-        scratch = _ArrayScratch(y.size, y)
+        scratch = ArrayScratch(y.size, y)
         seed = np.random.SeedSequence(scenario.seed).spawn(2)[1]
-        noise = _noise_pass(scratch, y.size, fs, scenario, config.data_band_hz, [], None, seed, sink, progress)
+        noise = noise_pass(scratch, y.size, fs, scenario, config.data_band_hz, [], None, seed, sink, progress)
         section = {
             "scenario": scenario.to_dict(),
             "seed": scenario.seed,

@@ -85,12 +85,37 @@ def make_noise_source(scenario: Scenario, fs: float, rng: np.random.Generator) -
     return AlphaStableNoise(fs, rng, alpha=n.alpha)
 
 
-class _ArrayInput:
+class ArrayInput:
+    """The channel's input from samples in memory (the file input reads a WAV instead).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (n,)
+        Transmitted real passband samples.
+
+    Attributes
+    ----------
+    n : int
+        Number of samples.
+    """
+
     def __init__(self, x: np.ndarray):
         self.x = np.asarray(x, dtype=np.float64)
         self.n = self.x.size
 
     def read(self, lo: int, hi: int) -> np.ndarray:
+        """Samples [lo, hi) (0 <= lo <= hi <= n).
+
+        Parameters
+        ----------
+        lo, hi : int
+            Sample range [samples].
+
+        Returns
+        -------
+        numpy.ndarray
+            A view of those samples.
+        """
         return self.x[lo:hi]
 
 
@@ -113,14 +138,45 @@ def _segment(source, lo: int, hi: int) -> np.ndarray:
     return out
 
 
-class _ArrayScratch:
+class ArrayScratch:
+    """The rendered (noise-free) output held in memory between the channel's two passes.
+
+    Parameters
+    ----------
+    n : int
+        Output length [samples].
+    data : numpy.ndarray, optional
+        Samples to start from (used in place; default zeros).
+    """
+
     def __init__(self, n: int, data: np.ndarray | None = None):
         self.data = np.zeros(n) if data is None else data
 
     def write(self, n0: int, block: np.ndarray) -> None:
+        """Store ``block`` from sample ``n0`` on.
+
+        Parameters
+        ----------
+        n0 : int
+            First output sample written.
+        block : numpy.ndarray
+            The samples.
+        """
         self.data[n0 : n0 + block.size] = block
 
     def read(self, n0: int, n1: int) -> np.ndarray:
+        """Output samples [n0, n1), a copy.
+
+        Parameters
+        ----------
+        n0, n1 : int
+            Sample range.
+
+        Returns
+        -------
+        numpy.ndarray
+            The samples.
+        """
         return self.data[n0:n1].copy()
 
 
@@ -146,7 +202,29 @@ class _FileScratch:
         self.path.unlink(missing_ok=True)
 
 
-def _render(model: ChannelModel, source, fs: float, n_out: int, scratch, progress: bool | None) -> None:
+def render_channel(model: ChannelModel, source, fs: float, n_out: int, scratch, progress: bool | None) -> None:
+    """First pass: the input through the channel model's paths (delays, gains, clock), block by block, into scratch.
+
+    Parameters
+    ----------
+    model : ChannelModel
+        Paths, their delays and gains, and the receiver's clock.
+    source : ArrayInput or a file input
+        The transmitted samples (``n`` and ``read(lo, hi)``).
+    fs : float
+        Sample rate of input and output [Hz].
+    n_out : int
+        Output length [samples].
+    scratch : ArrayScratch or a file scratch
+        Where the output is written (``write(n0, block)``).
+    progress : bool or None
+        Progress bar (None: on a terminal).
+
+    Returns
+    -------
+    None
+        The output is in ``scratch``.
+    """
     clock = model.clock
     with progress_bar(total=n_out, unit="sample", unit_scale=True, desc="channel", enabled=progress) as bar:
         for n0 in range(0, n_out, BLOCK):
@@ -172,9 +250,38 @@ def _frame_powers(scratch, truth: list[dict], fs: float, n_out: int, band: tuple
     return powers
 
 
-def _noise_pass(scratch, n_out: int, fs: float, scenario: Scenario, band_hz, truth: list[dict],
-                powers: list[float] | None, seed: np.random.SeedSequence, sink, progress) -> dict:
-    """Second pass: add [noise] at the in-band SNR (module docstring); fill each frame's SNR."""
+def noise_pass(scratch, n_out: int, fs: float, scenario: Scenario, band_hz, truth: list[dict],
+               powers: list[float] | None, seed: np.random.SeedSequence, sink, progress) -> dict:
+    """Second pass: add [noise] at the in-band SNR (module docstring); fill each frame's SNR.
+
+    Parameters
+    ----------
+    scratch : ArrayScratch or a file scratch
+        The noise-free output (``read(n0, n1)``).
+    n_out : int
+        Output length [samples].
+    fs : float
+        Sample rate [Hz].
+    scenario : Scenario
+        Its ``[noise]`` table (kind, SNR [dB]).
+    band_hz : (float, float)
+        The data band the SNR is measured in [Hz].
+    truth : list of dict
+        Per-frame truth rows, given ``signal_power_in_band`` and ``snr_db`` [dB] here.
+    powers : list of float or None
+        In-band signal power of each frame (None: of the whole output).
+    seed : numpy.random.SeedSequence
+        The noise's seed.
+    sink : callable
+        Called with each noisy output block, in order.
+    progress : bool or None
+        Progress bar (None: on a terminal).
+
+    Returns
+    -------
+    dict
+        The noise as applied: kind, SNR [dB], band [Hz], powers and σ.
+    """
     noise_src = make_noise_source(scenario, fs, np.random.default_rng(seed))
     if powers is None:
         powers = [in_band_power(scratch.read(0, n_out), fs, band_hz)] if noise_src is not None else []
@@ -247,10 +354,10 @@ def _run(
     if exchanges is not None:
         two_way_truth(truth, exchanges, model.c)
     scratch = make_scratch(n_out)
-    _render(model, source, fs, n_out, scratch, progress)
+    render_channel(model, source, fs, n_out, scratch, progress)
 
     powers = _frame_powers(scratch, truth, fs, n_out, band_hz) if truth else None
-    noise_info = _noise_pass(scratch, n_out, fs, scenario, band_hz, truth, powers, seeds[1], sink, progress)
+    noise_info = noise_pass(scratch, n_out, fs, scenario, band_hz, truth, powers, seeds[1], sink, progress)
 
     channel = {
         "created_by": f"seamodem {__version__}",
@@ -319,9 +426,9 @@ def simulate(
         raise ConfigError("frame_duration_s", "is required with t_emit_s")
     out: list[np.ndarray] = []
     truth, channel = _run(
-        _ArrayInput(x), float(fs), scenario, t_emit_s=list(t_emit_s), frame_duration_s=frame_duration_s,
+        ArrayInput(x), float(fs), scenario, t_emit_s=list(t_emit_s), frame_duration_s=frame_duration_s,
         band_hz=tuple(band_hz), reference_frequency_hz=reference_frequency_hz or 0.5 * sum(band_hz),
-        make_scratch=_ArrayScratch, sink=out.append, progress=progress,
+        make_scratch=ArrayScratch, sink=out.append, progress=progress,
     )
     return SimulationResult(np.concatenate(out) if out else np.zeros(0), truth, channel)
 

@@ -2,8 +2,9 @@
 
 From a hydrophone recording to one :class:`MeasurementRecord` per frame
 (SPEC §4), one module per job: :mod:`.settings` (what the receiver is told),
-:mod:`.measure` (one frame's arrival, Doppler and SNR), :mod:`.stream`
-(the block-fed :class:`Receiver`), :mod:`.demodulate` (compensation,
+:mod:`.measure` (one frame's arrival, Doppler and SNR), :mod:`.frame` (one detected frame
+to its record: :class:`FrameMeasurer`), :mod:`.stream` (the block-fed
+:class:`Receiver`), :mod:`.array` (hydrophone arrays), :mod:`.demodulate` (compensation,
 equalisation, payload), :mod:`.recording` (:func:`receive_file`).
 :func:`write_measurements` / :func:`read_measurements` store the records as
 CSV or JSON Lines.
@@ -28,6 +29,7 @@ _EXPORTS = exports(
         "demodulate": ("FrameDecode", "decode_frame", "decode_received", "demodulate", "fractional_samples"),
         "detect": ("Detection", "PilotDetector", "pilot_template"),
         "doppler": ("PilotFit", "ToneFit", "fit_pilot", "matched_filter", "tone_frequency_ml", "tone_track_eq9"),
+        "frame": ("BasebandBuffers", "FrameMeasurer"),
         "frontend": ("FrontEnd", "FrontEndPlan", "plan_front_end"),
         "measure": ("FrameMeasurement", "measure_frame"),
         "records": ("MeasurementRecord", "read_measurements", "write_measurements"),

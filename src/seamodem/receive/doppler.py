@@ -190,8 +190,29 @@ def _matched_filter_kernel(x, n_lo, n_hi, first, width, t0_s, fs, tk, T, half, v
         out[k] = complex(acc_re, acc_im)
 
 
-def _pilot_outputs(r, fs, t0_s, config: FrameConfig, t_start_s: float, eps: float) -> np.ndarray:
-    """Matched-filter outputs at the pilot symbols of a frame starting at t_start with Doppler ε."""
+def pilot_outputs(r, fs, t0_s, config: FrameConfig, t_start_s: float, eps: float) -> np.ndarray:
+    """Matched-filter outputs at the pilot symbols of a frame starting at t_start with Doppler ε.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Data-band complex baseband.
+    fs : float
+        Its rate [Hz].
+    t0_s : float
+        Time of its first sample [s].
+    config : FrameConfig
+        The frame (guard, pilot length, symbol period, carrier).
+    t_start_s : float
+        The frame's start [s].
+    eps : float
+        Doppler factor v/c (time scale 1 + ε).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_pilot,), complex
+        One matched-filter output per pilot symbol.
+    """
     tau = (config.n_guard + np.arange(config.n_pilot)) * config.symbol_period_s
     return matched_filter(
         r,
@@ -219,7 +240,7 @@ def pilot_correlation(
     """|Σ a_k* y_k| / Np, the Doppler-scaled pilot correlation, at candidate frame starts [s]."""
     eps = v_mps / sound_speed_mps
     a_conj = np.conj(np.asarray(pilot, dtype=complex))
-    return np.array([abs(a_conj @ _pilot_outputs(r, fs, t0_s, config, t, eps)) for t in np.atleast_1d(t_start_s)]) / len(
+    return np.array([abs(a_conj @ pilot_outputs(r, fs, t0_s, config, t, eps)) for t in np.atleast_1d(t_start_s)]) / len(
         a_conj
     )
 
@@ -288,7 +309,7 @@ def fit_pilot(
     a_conj = np.conj(np.asarray(pilot, dtype=complex))
 
     def mf(t, eps):
-        return _pilot_outputs(r, fs, t0_s, config, t, eps)
+        return pilot_outputs(r, fs, t0_s, config, t, eps)
 
     def corr(t, eps):
         return abs(a_conj @ mf(t, eps))

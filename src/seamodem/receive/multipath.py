@@ -355,12 +355,12 @@ def direct_path_doppler(
     Doppler (unresolved, grazing), but a bias of −40 mm/s with 2–5 % slower
     steep echoes (tests/receive/test_direct_doppler.py).
     """
-    from .doppler import _pilot_outputs  # the pilot-output helper is private to doppler
+    from .doppler import pilot_outputs
 
     a = np.asarray(pilot, dtype=complex)
     n_p = len(a)
     T = config.symbol_period_s / (1 + eps)
-    y = _pilot_outputs(r, fs, t0_s, config, paths.first_s, eps)
+    y = pilot_outputs(r, fs, t0_s, config, paths.first_s, eps)
     paths = find_echoes(r, fs, t0_s, config=config, pilot=a, paths=paths, eps=eps, es_n0=es_n0,
                         max_echoes=max_echoes, first_outputs=y)
     lags = np.arange(-(n_p - 1), n_p) * T
@@ -402,14 +402,14 @@ def find_echoes(
     [earliest − T, first + Np·T], with Es/N0 from the leading guard
     (:func:`_guard_es_n0`) unless ``es_n0`` is given.
     """
-    from .doppler import _pilot_outputs  # the pilot-output helper is private to doppler
+    from .doppler import pilot_outputs
 
     a = np.asarray(pilot, dtype=complex)
     n_p = len(a)
     T = config.symbol_period_s / (1 + eps)
     first_s = paths.first_s
     if es_n0 is None:
-        y = _pilot_outputs(r, fs, t0_s, config, first_s, eps) if first_outputs is None else first_outputs
+        y = pilot_outputs(r, fs, t0_s, config, first_s, eps) if first_outputs is None else first_outputs
         es_n0 = _guard_es_n0(r, fs, t0_s, config=config, pilot=a, y=y, first_s=first_s, eps=eps)
     found = fit_paths(r, fs, t0_s, config=config, pilot=a, t_start_s=first_s, eps=eps, es_n0=es_n0,
                       initial_delays_s=paths.delays_s, max_paths=len(paths.delays_s) + max_echoes,
