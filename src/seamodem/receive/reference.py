@@ -49,9 +49,9 @@ import scipy.fft
 from ..dsp import lowpass_taps
 from ..errors import ConfigError
 from ..transmit.reference import ReferenceBound, ReferenceWaveform, Replica, reference_crlb
-from .detect import _cluster_crossings, _first_distinct_peak, z_threshold
+from .detect import cluster_crossings, first_distinct_peak, z_threshold
 from .doppler import dichotomy_max
-from .frontend import FrontEnd, FrontEndPlan, _Branch
+from .frontend import FrontEnd, FrontEndPlan, Branch
 from .records import MeasurementRecord
 
 __all__ = [
@@ -149,7 +149,7 @@ def plan_band(references: Iterable[ReferenceWaveform], fs: float, *, v_max_mps: 
     transition = max(0.3 * half, 300.0)
     d = max(1, int(fs // (2 * half + transition)))
     stop = min(fs / d - half, 0.5 * fs * 0.999)
-    branch = _Branch(centre, half, stop, d, lowpass_taps(float(fs), half, stop, 80.0))
+    branch = Branch(centre, half, stop, d, lowpass_taps(float(fs), half, stop, 80.0))
     margin = d * math.ceil(branch.half_length / d)
     block = d * scipy.fft.next_fast_len(max(4 * margin // d + 1, (1 << 18) // d))
     if round(centre * block / fs) + (block // d + 1) // 2 > block // 2 or round(centre * block / fs) - block // d // 2 < 0:
@@ -316,11 +316,11 @@ class ReferenceDetector:
             # delay–Doppler ridge of a chirp, which must not pass for an earlier arrival
             b = int(best[strongest])
             own_hit = hit & (power[b] / noise >= self.eta)
-            return _first_distinct_peak(np.sqrt(power[b].astype(np.float64)), own_hit, j0, strongest,
+            return first_distinct_peak(np.sqrt(power[b].astype(np.float64)), own_hit, j0, strongest,
                                         fraction=self.first_path_fraction, half_lobe=self.half_lobe,
                                         gap=self.half_lobe + 1)
 
-        picks, resume = _cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
+        picks, resume = cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
                                            holdoff=self.holdoff, final=final, first_arrival=first_arrival)
         out = []
         for j, strongest in picks:
