@@ -19,16 +19,16 @@ __all__ = ["BandPlan", "plan_band", "BandDecimator"]
 
 @dataclass(frozen=True)
 class BandPlan:
-    """Mixing frequency, filter and rates of the front end.
+    """Mixing frequency, filter and rates of the front end (built by :func:`plan_band`).
 
-    Attributes
+    Parameters
     ----------
     centre_hz : float
         Mixing frequency [Hz].
     passband_hz : float
         Half-width kept around the centre [Hz].
     front_end : FrontEndPlan
-        The frame receiver's frequency-domain front end (:mod:`.frontend`) set
+        The frame receiver's frequency-domain front end (:mod:`~seamodem.receive.frontend`) set
         to this band (its tone branch is the same band, unused).
     """
 
@@ -43,6 +43,7 @@ class BandPlan:
 
     @property
     def decimation(self) -> int:
+        """Input samples per baseband sample."""
         return self.front_end.data.decimation
 
     @property
@@ -62,6 +63,22 @@ def plan_band(references: Iterable[ReferenceWaveform], fs: float, *, v_max_mps: 
     The stop edge is fs_bb − passband: what aliases on decimation lands in the
     transition band only, never on the references' band; the filter costs
     nothing more for being long (it is applied in the frequency domain).
+
+    Parameters
+    ----------
+    references : iterable of ReferenceWaveform
+        The pings to receive: the band is the union of theirs.
+    fs : float
+        Input (recording) sample rate [Hz].
+    v_max_mps : float
+        Largest |v_r| searched [m/s]: the band is widened by its Doppler scale.
+    sound_speed_mps : float
+        c [m/s].
+
+    Returns
+    -------
+    BandPlan
+        Centre, half-width, decimation, filter and block sizes.
 
     Raises
     ------
@@ -97,6 +114,11 @@ class BandDecimator:
     The frame receiver's :class:`~seamodem.receive.frontend.FrontEnd` (one
     real FFT per block, the band's bins kept and filtered), on the references' band.
 
+    Parameters
+    ----------
+    plan : BandPlan
+        The band, rates and filter (:func:`plan_band`).
+
     Examples
     --------
     >>> from seamodem.transmit.reference import parse_reference
@@ -112,7 +134,26 @@ class BandDecimator:
         self._fe = FrontEnd(plan.front_end)
 
     def push(self, x_pb: np.ndarray) -> np.ndarray:
+        """Baseband of the next input samples, as far as the filter allows.
+
+        Parameters
+        ----------
+        x_pb : numpy.ndarray, shape (n,)
+            The next passband samples (any block length).
+
+        Returns
+        -------
+        numpy.ndarray, complex
+            The baseband samples now complete, at ``plan.fs_bb``, continuing the previous output.
+        """
         return self._fe.push(x_pb)[0]
 
     def flush(self) -> np.ndarray:
+        """The rest of the baseband once the input has ended.
+
+        Returns
+        -------
+        numpy.ndarray, complex
+            The last baseband samples (the input padded with zeros).
+        """
         return self._fe.flush()[0]

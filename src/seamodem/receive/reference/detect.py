@@ -20,7 +20,7 @@ __all__ = ["ReferenceDetection", "ReferenceDetector", "replica_samples", "MIN_RH
 class ReferenceDetection:
     """A coarse detection: lag, scale bin and statistics.
 
-    Attributes
+    Parameters
     ----------
     t_start_s : float
         Coarse arrival (±½ baseband sample) [s].
@@ -37,6 +37,24 @@ class ReferenceDetection:
 
 
 def replica_samples(replica: Replica, fs_bb: float, carrier_hz: float, eps: float) -> np.ndarray:
+    """The replica at baseband, time-scaled by 1 + ε, sampled from its first sample on.
+
+    Parameters
+    ----------
+    replica : Replica
+        The reference's replica (:func:`~seamodem.transmit.reference.reference_replica`).
+    fs_bb : float
+        Baseband sample rate [Hz].
+    carrier_hz : float
+        Mixing frequency of the baseband [Hz].
+    eps : float
+        Doppler scale ε (the received ping lasts duration/(1 + ε)).
+
+    Returns
+    -------
+    numpy.ndarray, complex
+        q[n] = s_a((1 + ε) n/fs_bb) mixed to baseband, n = 0 … ⌈duration/(1 + ε)·fs_bb⌉.
+    """
     n = int(math.ceil(replica.duration_s / (1 + eps) * fs_bb)) + 1
     return replica.scaled(np.arange(n) / fs_bb, t_arrival_s=0.0, eps=eps, carrier_hz=carrier_hz)
 
@@ -65,13 +83,21 @@ class ReferenceDetector:
     Parameters
     ----------
     replica : Replica
+        The reference's replica.
     plan : BandPlan
-    v_max_mps, sound_speed_mps : float
+        The front end whose baseband is searched (rate, mixing frequency).
+    v_max_mps : float
+        Largest |v_r| searched [m/s]: the scale bins cover ±v_max/c.
+    sound_speed_mps : float
+        c [m/s].
     false_alarms_per_hour : float
-        Design rate in white Gaussian noise.
+        Design rate in white Gaussian noise [1/h].
     min_rho : float
-    first_path_fraction, multipath_window_s : float
-        First-arrival rule (as :class:`~seamodem.receive.detect.PilotDetector`).
+        Smallest normalised correlation of a detection.
+    first_path_fraction : float
+        An earlier peak is the first arrival from this fraction of the strongest's amplitude.
+    multipath_window_s : float
+        How far after the first crossing stronger paths are sought [s] (with the ping's length).
     """
 
     def __init__(
@@ -120,7 +146,26 @@ class ReferenceDetector:
         return power
 
     def find(self, r: np.ndarray, r_start: int, scan_from: int, *, final: bool) -> tuple[list[ReferenceDetection], int]:
-        """Detections at lags ≥ ``scan_from`` (global baseband indices; r[0] is index ``r_start``)."""
+        """Detections at lags ≥ ``scan_from`` (global baseband indices; r[0] is index ``r_start``).
+
+        Parameters
+        ----------
+        r : numpy.ndarray, complex
+            Baseband buffer (:class:`~seamodem.receive.reference.BandDecimator`'s output).
+        r_start : int
+            Global baseband index of ``r[0]`` [samples].
+        scan_from : int
+            First lag to search [global baseband index]; up to half a second before it is the noise context.
+        final : bool
+            No more samples will come: decide arrivals whose window is cut by the end.
+
+        Returns
+        -------
+        detections : list of ReferenceDetection
+            Each arrival found, its scale bin and statistics.
+        resume : int
+            Global baseband index where the next call resumes.
+        """
         lo = max(r_start, scan_from - self.context)
         seg = r[lo - r_start :]
         if len(seg) < self.length:
@@ -148,11 +193,11 @@ class ReferenceDetector:
             b = int(best[strongest])
             own_hit = hit & (power[b] / noise >= self.eta)
             return first_distinct_peak(np.sqrt(power[b].astype(np.float64)), own_hit, j0, strongest,
-                                        fraction=self.first_path_fraction, half_lobe=self.half_lobe,
-                                        gap=self.half_lobe + 1)
+                                       fraction=self.first_path_fraction, half_lobe=self.half_lobe,
+                                       gap=self.half_lobe + 1)
 
         picks, resume = cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
-                                           holdoff=self.holdoff, final=final, first_arrival=first_arrival)
+                                          holdoff=self.holdoff, final=final, first_arrival=first_arrival)
         out = []
         for j, strongest in picks:
             b = int(best[strongest])

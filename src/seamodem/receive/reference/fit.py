@@ -23,9 +23,9 @@ NOISE_GAP_S, NOISE_WINDOW_S = 0.005, 0.05
 
 @dataclass(frozen=True)
 class ReferenceFit:
-    """Fine arrival time, Doppler scale and their bounds for one detection.
+    """Fine arrival time, Doppler scale and their bounds for one detection (:func:`fit_reference`).
 
-    Attributes
+    Parameters
     ----------
     t_arrival_s : float
         Reception time of the reference's first sample, first path [s].
@@ -85,15 +85,29 @@ def fit_reference(
     ----------
     r : numpy.ndarray, complex
         Baseband at carrier ``carrier_hz``; r[n] at t0 + n/fs.
+    fs : float
+        Baseband sample rate [Hz].
+    t0_s : float
+        Time of ``r[0]`` [s].
+    replica : Replica
+        The reference's replica.
+    carrier_hz : float
+        Mixing frequency of the baseband [Hz].
     detection : ReferenceDetection
+        The coarse detection: start lag and scale bin.
     search_eps : float
         Half-width of the ε dichotomy (the bank spacing).
     noise_bandwidth_hz : float
-        The front end's ∫|H|² df, to turn the baseband noise variance into N0.
+        The front end's ∫|H|² df [Hz], to turn the baseband noise variance into N0.
     eps_max : float
         Largest |ε| searched (v_max/c).
     bound : ReferenceBound, optional
         :func:`~seamodem.transmit.reference.reference_crlb` of the replica (computed if not given).
+
+    Returns
+    -------
+    ReferenceFit
+        Arrival of the first path [s], ε, gain, E/N0, SNR, σ's, ridge coordinate, misfit and paths.
     """
     bound = reference_crlb(replica) if bound is None else bound
     g = bound.ridge_slope_s

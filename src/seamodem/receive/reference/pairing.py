@@ -19,6 +19,22 @@ def pair_doppler(
     ε = T_sp/Δ − 1, σ_ε = (T_sp/Δ²)·√(σ1² + σ2²) (mean closing speed over the
     packet).
 
+    Parameters
+    ----------
+    t1_s, t2_s : float
+        The two pings' measured times (arrivals or ridge coordinates) [s].
+    sigma1_s, sigma2_s : float
+        Their σ's [s].
+    spacing_s : float
+        T_sp, their spacing at emission [s].
+
+    Returns
+    -------
+    eps : float
+        Doppler scale ε (mean over the packet).
+    sigma_eps : float
+        Its σ.
+
     Examples
     --------
     >>> eps, s = pair_doppler(1.0, 9.0 / (1 + 1e-3) + 1.0, 1e-6, 1e-6, spacing_s=9.0)
@@ -42,6 +58,23 @@ def pair_up(found: list[FittedPing], *, eps_max: float, max_accel_mps2: float = 
     are precise, the prior when they are not, as an HFM's). Then ε̄ = T_sp/(r_post − r_pre − 2gδ̃) − 1 with
     σ_ε̄ = (T_sp/Δ²)·√(σ_r,pre² + σ_r,post² + 4g²·var δ̃) (:func:`pair_doppler` for the spacing alone).
     Each ping's arrival on its ridge at its own ε̄ ∓ δ̃: t = r − g·(ε̄ ∓ δ̃).
+
+    Parameters
+    ----------
+    found : list of FittedPing
+        Fitted detections (any references; those without a postamble are left alone). Pairs get
+        ``role``, ``eps_pair``, ``sigma_eps_pair``, ``t_pair_s`` and ``sigma_t_pair_s``.
+    eps_max : float
+        Largest |ε| searched (v_max/c): how far a pair's spacing may be from T_sp.
+    max_accel_mps2 : float
+        Largest radial acceleration over a packet [m/s²]; 0 states a constant speed.
+    sound_speed_mps : float
+        c [m/s].
+
+    Returns
+    -------
+    None
+        ``found``'s items are updated in place.
     """
     by_ref: dict[str, list[FittedPing]] = {}
     for f in found:

@@ -67,7 +67,27 @@ def _peak_sidelobe(replica: Replica, fs: float, carrier_hz: float) -> float:
 
 
 class PathFitter:
-    """Maximum-likelihood (t_a, ε) of one path of a reference in a baseband segment (x[n] at t[n])."""
+    """Maximum-likelihood (t_a, ε) of one path of a reference in a baseband segment (x[n] at t[n]).
+
+    Also the joint fit of several paths at one scale, the search for echoes and an earlier path, and the
+    echoes' inflation of the direct path's bounds (:func:`~seamodem.receive.reference.fit_reference` chains them).
+
+    Parameters
+    ----------
+    replica : Replica
+        The reference's replica.
+    t : numpy.ndarray
+        Time of each sample of the segments to fit [s] (uniform at ``fs``).
+    carrier_hz : float
+        Mixing frequency of the baseband [Hz].
+    fs : float
+        Baseband sample rate [Hz].
+    ridge_slope_s : float
+        g, the slope of the reference's delay–Doppler ridge [s per unit ε]
+        (:class:`~seamodem.transmit.reference.ReferenceBound`).
+    limit : float
+        Largest |ε| searched.
+    """
 
     def __init__(self, replica: Replica, t: np.ndarray, carrier_hz: float, fs: float, ridge_slope_s: float, limit: float):
         self.replica, self.t, self.carrier_hz, self.fs = replica, t, carrier_hz, fs
@@ -81,13 +101,47 @@ class PathFitter:
         return slice(max(lo, 0), max(min(hi, len(self.t)), 0))
 
     def corr(self, x, ta, eps) -> float:
-        """|⟨q, x⟩|/‖q‖: the likelihood with A unknown (‖q‖ varies as 1/√(1 + ε); left out, it biases ε along the ridge)."""
+        """|⟨q, x⟩|/‖q‖: the likelihood with A unknown (‖q‖ varies as 1/√(1 + ε); left out, it biases ε along the ridge).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        ta : float
+            Arrival of the replica's first sample [s].
+        eps : float
+            Doppler scale ε.
+
+        Returns
+        -------
+        float
+            The normalised correlation magnitude (baseband units).
+        """
         k = self._support(ta, eps)
         q = self.replica.scaled(self.t[k], t_arrival_s=ta, eps=eps, carrier_hz=self.carrier_hz)
         return abs(np.vdot(q, x[k])) / math.sqrt(max(np.real(np.vdot(q, q)), np.finfo(float).tiny))
 
     def gauss_newton(self, x, ta, eps, *, free_eps: bool):
-        """One Gauss–Newton step of the fit x ≈ A q(t_a, ε) (A complex, t_a and ε real)."""
+        """One Gauss–Newton step of the fit x ≈ A q(t_a, ε) (A complex, t_a and ε real).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        ta : float
+            Current arrival [s].
+        eps : float
+            Current Doppler scale ε.
+        free_eps : bool
+            Step ε too (else ε stays).
+
+        Returns
+        -------
+        ta : float
+            The next arrival [s] (the step shrunk to half a sample at most).
+        eps : float
+            The next ε.
+        """
         k = self._support(ta, eps)
         t, fs, x = self.t[k], self.fs, x[k]
         q, dq = self.replica.scaled_with_derivative(t, t_arrival_s=ta, eps=eps, carrier_hz=self.carrier_hz)
@@ -110,6 +164,28 @@ class PathFitter:
         around its best point. A chirp's ridge is nearly flat across the bank (an LFM loses a fraction of a dB
         between its bins): the detection's bin, picked by the noise and by an echo's ridge beside the direct
         path's, can be several bins from the truth, and a dichotomy of ±1 bin around it clips the estimate.
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        ta0 : float
+            Starting arrival [s].
+        eps0 : float
+            Starting Doppler scale ε.
+        search_eps : float
+            Half-width of the dichotomy around ``eps0`` (0: the polish alone).
+        grid : bool
+            Start from the best of 9 arrivals over ±1 sample around ``ta0``.
+        scan : bool
+            Search the profile over all of ±limit first.
+
+        Returns
+        -------
+        ta : float
+            Arrival [s].
+        eps : float
+            Doppler scale ε.
         """
         fs, g, limit = self.fs, self.g, self.limit
         if grid:  # a coarse lag is within half a sample: start from the best of a fine grid around it
@@ -161,6 +237,26 @@ class PathFitter:
         model (an echo's sidelobe is then part of the model, not a pull on the direct path); the energy
         explained ‖P_Q x‖² = Re(bᴴ A), b = Qᴴx, is the likelihood of ε with every other parameter maximised.
         Sums run over the paths' joint support only.
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        times : numpy.ndarray
+            Starting arrival of each path [s].
+        eps : float
+            The paths' common Doppler scale ε.
+        steps : int
+            Joint Gauss–Newton steps on the arrivals.
+
+        Returns
+        -------
+        times : numpy.ndarray
+            Each path's arrival [s].
+        gains : numpy.ndarray, complex
+            Each path's complex amplitude (zeros when the paths cannot be told apart).
+        explained : float
+            ‖P_Q x‖², the energy the paths explain (baseband units²).
         """
         times = np.array(times, dtype=float)
         n_p = len(times)
@@ -199,6 +295,24 @@ class PathFitter:
         nearly agree (an inverted surface echo 150 µs behind at 24 kHz is 36° from the direct path) make one
         broad hump; started from one point, the joint fit at the true scale misses the echo and explains less
         than a wrong scale does (an LFM at 3 dB, one ping in 24 taken 650 µs along its ridge).
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        ta : float
+            Arrival around which peaks are sought [s].
+        eps : float
+            Doppler scale ε of the replica correlated.
+        noise : float
+            Baseband noise variance (baseband units²).
+        split : bool
+            Also start a second path at the far end of a broad hump.
+
+        Returns
+        -------
+        numpy.ndarray
+            Each peak's lag [s], strongest first, on the sample grid.
         """
         # the scan asks for the same few scales (its grid) on the same segment: both spectra are kept
         n = scipy.fft.next_fast_len(len(x) + int(math.ceil(self.replica.duration_s * self.fs / (1 - self.limit))) + 2)
@@ -256,9 +370,21 @@ class PathFitter:
         one absorbs the leak of an echo 1–2 main lobes behind it and passes the test at high SNR (PN7 at
         20 dB through bench_reference's channel: 16 µs errors against a CRLB of 1 µs).
 
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        times : numpy.ndarray
+            Arrivals of the paths already found [s].
+        eps : float
+            The paths' common Doppler scale ε.
+        noise : float
+            Baseband noise variance (baseband units²).
+
         Returns
         -------
-        (times, gains) of τ and the paths, or None.
+        tuple of numpy.ndarray, or None
+            (times [s], complex gains) of τ and the paths, τ first; None when the earlier path fails the test.
         """
         lobe = 1.0 / self.replica.reference.bandwidth_hz
         times = np.sort(np.asarray(times, dtype=float))
@@ -282,6 +408,26 @@ class PathFitter:
         noise, can be several bins from the truth), and an echo a few main lobes behind ripples it by its
         sidelobe (≈ ±10 % for a surface echo 0.23 ms behind an LFM 19–29 kHz, enough to move its maximum by
         metres per second): the joint model removes the ripple and leaves the ridge's own curvature.
+
+        Parameters
+        ----------
+        x : numpy.ndarray, complex
+            Baseband segment, x[n] at ``t[n]`` (the fitter's time axis).
+        ta0 : float
+            The detector's arrival [s].
+        eps0 : float
+            The detector's scale bin ε.
+        noise : float
+            Baseband noise variance (baseband units²).
+
+        Returns
+        -------
+        times : numpy.ndarray
+            Each path's arrival at the best scale [s].
+        gains : numpy.ndarray, complex
+            Each path's complex amplitude.
+        eps : float
+            The best Doppler scale ε.
         """
         best = (-math.inf, eps0, ta0)
         grid = np.linspace(-self.limit, self.limit, SCAN_POINTS)
@@ -320,6 +466,24 @@ class PathFitter:
         The Fisher matrix of every path's (t_a, ε, Re A, Im A), J ∝ Re(DᴴD) in white baseband noise,
         inverted whole and for the direct path alone: an echo closer than the main lobe makes the direct
         path's arrival uncertain however high the SNR, which a single-path CRLB does not say.
+
+        Parameters
+        ----------
+        ta : float
+            The direct path's arrival [s].
+        eps : float
+            Its Doppler scale ε.
+        gain : complex
+            Its complex amplitude.
+        echoes : list of (float, float, complex)
+            Each echo's arrival [s], ε and complex amplitude.
+
+        Returns
+        -------
+        k_eps : float
+            σ_ε with the echoes over σ_ε alone (≥ 1; inf when the Fisher matrix is singular).
+        k_ridge : float
+            The same for the ridge coordinate t_a + g·ε.
         """
         cols = []
         for t_p, e_p, a_p in [(ta, eps, gain), *echoes]:

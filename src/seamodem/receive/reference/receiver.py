@@ -126,7 +126,18 @@ class ReferenceReceiver:
         return found
 
     def run(self, blocks: Iterable[np.ndarray]) -> Iterator[FittedPing]:
-        """Fitted detections of every reference, channel by channel, as blocks (n, n_channels) arrive."""
+        """Fitted detections of every reference, channel by channel, as blocks (n, n_channels) arrive.
+
+        Parameters
+        ----------
+        blocks : iterable of numpy.ndarray
+            The recording in blocks of shape (n, n_channels) (or (n,) for one channel), at ``fs``.
+
+        Yields
+        ------
+        FittedPing
+            Each detection with its fine fit, as soon as it is complete; the last ones after the input ends.
+        """
         for block in blocks:
             block = np.asarray(block, dtype=float).reshape(len(block), -1)
             for j, ch in enumerate(self.channels):
@@ -139,7 +150,20 @@ class ReferenceReceiver:
 
 
 def best_per_detection(found: list[FittedPing], *, tolerance_s: float) -> list[FittedPing]:
-    """Of detections of one reference within ``tolerance_s`` on different channels, the one with the highest E/N0."""
+    """Of detections of one reference within ``tolerance_s`` on different channels, the one with the highest E/N0.
+
+    Parameters
+    ----------
+    found : list of FittedPing
+        Detections of every channel.
+    tolerance_s : float
+        Detections of one reference closer than this are one ping [s].
+
+    Returns
+    -------
+    list of FittedPing
+        One detection per ping, in order of arrival.
+    """
     out: list[FittedPing] = []
     for f in sorted(found, key=lambda f: (f.reference.name, f.fit.t_arrival_s)):
         last = out[-1] if out else None
@@ -157,6 +181,17 @@ def keep_matching_reference(found: list[FittedPing]) -> list[FittedPing]:
     Two references that share a band (an LFM and an HFM of the same sweep)
     correlate partly with each other's pings; the reference that was sent
     matches with ρ ≈ S/(S + N), the other with less.
+
+    Parameters
+    ----------
+    found : list of FittedPing
+        Detections of every reference.
+
+    Returns
+    -------
+    list of FittedPing
+        Without the detections of a reference that overlap (within half a ping) a better-matching one,
+        in order of arrival.
     """
     out: list[FittedPing] = []
     for f in sorted(found, key=lambda f: f.fit.t_arrival_s):

@@ -21,8 +21,10 @@ class ReferenceRecord(MeasurementRecord):
     The tone columns (``v_r_tone_eq9_mps``, ``tone_c_n0_dbhz``) are NaN; ``v_r_mps``
     and ``v_r_bank_mps`` are both the bank + dichotomy estimate.
 
-    Attributes
+    Parameters
     ----------
+    **measurement
+        Every :class:`MeasurementRecord` column.
     reference : str
         Name of the reference that matched.
     channel : int
@@ -56,7 +58,30 @@ REFERENCE_FIELDS = tuple(f.name for f in dataclasses.fields(ReferenceRecord))
 
 @dataclass
 class FittedPing:
-    """One fitted detection, before it is tied to an emission."""
+    """One fitted detection, before it is tied to an emission (what :meth:`~seamodem.receive.reference.ReferenceReceiver.run` yields).
+
+    :func:`~seamodem.receive.reference.pair_up` fills the pair fields in place;
+    :func:`to_record` turns it into a :class:`ReferenceRecord`.
+
+    Parameters
+    ----------
+    reference : ReferenceWaveform
+        The reference that matched.
+    detection : ReferenceDetection
+        The coarse detection.
+    fit : ReferenceFit
+        The fine fit.
+    channel : int
+        Channel it was found on (index into the channels fed to the receiver, then the recording's).
+    clipped : int
+        Clipped input samples within the ping.
+    role : str
+        "ping", "preamble" or "postamble".
+    eps_pair, sigma_eps_pair : float
+        Doppler scale ε from the pair's spacing and its σ (NaN for lone pings).
+    t_pair_s, sigma_t_pair_s : float
+        Arrival placed on the ridge at the pair's ε, and its σ [s] (NaN for lone pings).
+    """
 
     reference: ReferenceWaveform
     detection: ReferenceDetection
@@ -71,7 +96,27 @@ class FittedPing:
 
 
 def to_record(f: FittedPing, emissions, *, sound_speed_mps: float, clock_offset_s: float = 0.0, source: str = "") -> ReferenceRecord:
-    """The measurement record of one fitted detection (``emissions``: a :class:`~seamodem.receive.settings.Emissions` or None)."""
+    """The measurement record of one fitted detection, tied to its emission.
+
+    Parameters
+    ----------
+    f : FittedPing
+        The fitted detection (paired or not).
+    emissions : Emissions or None
+        When the reference was emitted (:class:`~seamodem.receive.settings.Emissions`); None: unknown
+        (frame index −1, range NaN).
+    sound_speed_mps : float
+        c [m/s].
+    clock_offset_s : float
+        Receiver clock minus beacon clock [s].
+    source : str
+        The record's ``source`` column.
+
+    Returns
+    -------
+    ReferenceRecord
+        Range, Doppler, σ's and the reference's own columns.
+    """
     c = sound_speed_mps
     fit = f.fit
     if math.isfinite(f.t_pair_s) and f.sigma_t_pair_s < fit.sigma_t_s:
