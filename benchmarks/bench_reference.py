@@ -30,6 +30,7 @@ import numpy as np
 from seamodem.channel.scenario import parse_scenario
 from seamodem.channel.simulate import simulate
 from seamodem.receive.reference import MIN_RHO, ReferenceReceiver, pair_up
+from seamodem.receive.settings import ReferenceSettings
 from seamodem.transmit.reference import (
     ReferenceWaveform,
     emission_times,
@@ -84,8 +85,9 @@ def through_channel(ref: ReferenceWaveform, snr_db: float, *, count: int, period
 
 
 def receive(refs, y, *, fs=FS, false_alarms_per_hour=0.01, min_rho=MIN_RHO):
-    rx = ReferenceReceiver(refs, fs, sound_speed_mps=C, v_max_mps=5.0, false_alarms_per_hour=false_alarms_per_hour,
-                           min_rho=min_rho)
+    settings = ReferenceSettings(sound_speed_mps=C, v_max_mps=5.0, false_alarms_per_hour=false_alarms_per_hour,
+                                 min_rho=min_rho)
+    rx = ReferenceReceiver(refs, fs, settings=settings)
     blocks = (y[i : i + (1 << 18)].reshape(-1, 1) for i in range(0, len(y), 1 << 18))
     return rx, list(rx.run(blocks))
 
@@ -107,15 +109,15 @@ def multipath_crlb_t(rx, replica, bound, row, e_n0: float) -> float:
     """The arrival's CRLB with the truth's echoes as nuisance paths (each path's t_a, ε and complex gain unknown).
 
     The joint Fisher matrix of every path of the simulator's truth (its delays, Dopplers and amplitudes, not
-    the receiver's fit) in white baseband noise (:meth:`~seamodem.receive.reference._PathFitter.echo_inflation`),
+    the receiver's fit) in white baseband noise (:meth:`~seamodem.receive.reference.PathFitter.echo_inflation`),
     over the direct path's own: the single-path bound at the measured E/N0 times that inflation.
     """
-    from seamodem.receive.reference import _PathFitter
+    from seamodem.receive.reference import PathFitter
 
     fs, paths = rx.plan.fs_bb, row["paths"]
     t0 = paths[0]["t_arrival_s"]
     t = t0 - 0.002 + np.arange(int((replica.duration_s + 0.01 + max(p["t_arrival_s"] for p in paths) - t0) * fs)) / fs
-    fitter = _PathFitter(replica, t, rx.plan.centre_hz, fs, bound.ridge_slope_s, 1.0)
+    fitter = PathFitter(replica, t, rx.plan.centre_hz, fs, bound.ridge_slope_s, 1.0)
     echoes = [(p["t_arrival_s"], p["v_r_true_mps"] / C, p["amplitude"]) for p in paths[1:]]
     k_e, k_ridge = fitter.echo_inflation(t0, paths[0]["v_r_true_mps"] / C, paths[0]["amplitude"], echoes)
     _, s_e, s_ridge = bound.at(e_n0)
@@ -278,7 +280,7 @@ def speed_table(quick: bool) -> list[str]:
             i0 = int((0.5 + 3 * k + rng.uniform(0, 0.1)) * fs)
             y[i0 : i0 + len(w)] += gain * w
         # steady state: the receiver (replica bank, CRLB, filters) is built before the clock starts
-        rx = ReferenceReceiver([ref], fs, sound_speed_mps=C, v_max_mps=5.0)
+        rx = ReferenceReceiver([ref], fs, settings=ReferenceSettings(sound_speed_mps=C, v_max_mps=5.0))
         t0, c0 = time.perf_counter(), time.process_time()
         found = list(rx.run(y[i : i + (1 << 18)].reshape(-1, 1) for i in range(0, len(y), 1 << 18)))
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0

@@ -15,6 +15,7 @@ import scipy.signal
 
 from seamodem.dsp import pb2bb
 from seamodem.receive.reference import BandDecimator, ReferenceReceiver, keep_matching_reference, pair_up, plan_band
+from seamodem.receive.settings import ReferenceSettings
 from seamodem.transmit.reference import ReferenceWaveform, parse_reference, reference_crlb, reference_replica
 
 from independent import add_noise, chirp_ping, received
@@ -24,7 +25,7 @@ C = 1500.0
 
 
 def _run(references, x, fs=FS, **kw):
-    rx = ReferenceReceiver(references, fs, sound_speed_mps=C, **kw)
+    rx = ReferenceReceiver(references, fs, settings=ReferenceSettings(sound_speed_mps=C, **kw))
     blocks = [x[i : i + (1 << 17)].reshape(-1, 1) for i in range(0, len(x), 1 << 17)]
     return rx, list(rx.run(blocks))
 

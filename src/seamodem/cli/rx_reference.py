@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import warnings
 from pathlib import Path
 
-from ..errors import InputFileError, SeamodemError
+from ..errors import ConfigError, InputFileError, SeamodemError
 from ..io.files import check_writable
 from ._common import command_line
 
@@ -120,14 +119,17 @@ def run_reference(args: argparse.Namespace) -> int:
     for name in ("segment", "workers", "scheduler", "resume", "plot"):
         if getattr(args, name, None):
             raise SeamodemError(f"{name}: not available with --reference")
-    if args.turnaround is not None:
-        raise SeamodemError("turnaround: two-way ranging is not available with --reference")
-    if not (math.isfinite(args.v_max) and 0 < args.v_max < 100):
-        raise SeamodemError(f"v-max: must be in (0, 100) m/s, got {args.v_max!r}")
-    if not (math.isfinite(args.false_alarms_per_hour) and args.false_alarms_per_hour > 0):
-        raise SeamodemError(f"false-alarms-per-hour: must be > 0, got {args.false_alarms_per_hour!r}")
-    if args.max_accel is not None and not (math.isfinite(args.max_accel) and 0 <= args.max_accel < 100):
-        raise SeamodemError(f"max-accel: must be in [0, 100) m/s², got {args.max_accel!r}")
+    from ..receive.settings import ReferenceSettings
+
+    try:
+        settings = ReferenceSettings(
+            sound_speed_mps=DEFAULT_SOUND_SPEED_MPS if args.sound_speed is None else args.sound_speed,
+            clock_offset_s=args.clock_offset, turnaround_s=args.turnaround, v_max_mps=args.v_max,
+            false_alarms_per_hour=args.false_alarms_per_hour,
+            **({} if args.max_accel is None else {"max_accel_mps2": args.max_accel}),
+        )
+    except ConfigError as exc:  # named as the option is spelled
+        raise SeamodemError(f"{exc.parameter.replace('_', '-')}:{str(exc).partition(':')[2]}") from None
     if args.all_channels and args.channel is not None:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
     recording = Path(args.recording[0])
@@ -145,13 +147,10 @@ def run_reference(args: argparse.Namespace) -> int:
     channels = source.check_channel(None if args.all_channels else (args.channel or 0))
     references = [r for spec in args.reference for r in load_references(spec)]
     sidecar = _own_sidecar(recording)
-    sound_speed = args.sound_speed if args.sound_speed is not None else DEFAULT_SOUND_SPEED_MPS
-    if not (math.isfinite(sound_speed) and sound_speed > 0):
-        raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
+    sound_speed = settings.sound_speed_mps
     emissions = _emissions(args, sidecar, references)
 
     from ..receive.reference import (
-        MAX_ACCEL_MPS2,
         ReferenceReceiver,
         best_per_detection,
         keep_matching_reference,
@@ -164,10 +163,8 @@ def run_reference(args: argparse.Namespace) -> int:
     receiver = ReferenceReceiver(
         [rep.reference for rep in replicas],
         source.sample_rate_hz,
+        settings=settings,
         n_channels=len(channels),
-        sound_speed_mps=sound_speed,
-        v_max_mps=args.v_max,
-        false_alarms_per_hour=args.false_alarms_per_hour,
         replicas=replicas,
     )
     found = list(receiver.run(source.blocks(channels)))
@@ -177,10 +174,10 @@ def run_reference(args: argparse.Namespace) -> int:
         f.clipped = source.clips.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
     found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
     found = keep_matching_reference(found)
-    max_accel = MAX_ACCEL_MPS2 if args.max_accel is None else args.max_accel
-    pair_up(found, eps_max=args.v_max / sound_speed, sound_speed_mps=sound_speed, max_accel_mps2=max_accel)
+    max_accel = settings.max_accel_mps2
+    pair_up(found, eps_max=settings.eps_max, sound_speed_mps=sound_speed, max_accel_mps2=max_accel)
     records = [
-        to_record(f, emissions[f.reference.name], sound_speed_mps=sound_speed, clock_offset_s=args.clock_offset)
+        to_record(f, emissions[f.reference.name], sound_speed_mps=sound_speed, clock_offset_s=settings.clock_offset_s)
         for f in found
     ]
     metadata = {
@@ -189,9 +186,9 @@ def run_reference(args: argparse.Namespace) -> int:
         "sample_rate_hz": source.sample_rate_hz,
         "channels": channels,
         "sound_speed_mps": sound_speed,
-        "clock_offset_s": args.clock_offset,
-        "v_max_mps": args.v_max,
-        "false_alarms_per_hour": args.false_alarms_per_hour,
+        "clock_offset_s": settings.clock_offset_s,
+        "v_max_mps": settings.v_max_mps,
+        "false_alarms_per_hour": settings.false_alarms_per_hour,
         "max_accel_mps2": max_accel,
         "references": [r.to_dict() for r in receiver.references],
         "front_end": {"centre_hz": receiver.plan.centre_hz, "baseband_rate_hz": receiver.plan.fs_bb,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .viterbi import _NEXT, _OUTPUTS
+from .viterbi import NEXT_STATE, OUTPUTS
 
 __all__ = ["bcjr_decode"]
 
@@ -93,7 +93,7 @@ def bcjr_decode(llr: np.ndarray, n_info: int) -> tuple[np.ndarray, np.ndarray]:
     llr = np.ascontiguousarray(llr[: 2 * n_steps], dtype=np.float64)
     if llr.size < 2 * n_steps:
         raise ValueError(f"need {2 * n_steps} LLRs for {n_info} information bits, got {llr.size}")
-    info, coded = _bcjr(llr, _OUTPUTS, _NEXT, n_steps)
+    info, coded = _bcjr(llr, OUTPUTS, NEXT_STATE, n_steps)
     return info[:n_info], coded - llr
 
 

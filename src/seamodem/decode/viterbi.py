@@ -7,7 +7,7 @@ from numba import njit
 
 from ..transmit.coding import CONSTRAINT_LENGTH, CONV_GENERATORS
 
-__all__ = ["viterbi_decode", "trellis"]
+__all__ = ["viterbi_decode", "trellis", "OUTPUTS", "NEXT_STATE"]
 
 N_STATES = 1 << (CONSTRAINT_LENGTH - 1)
 
@@ -35,7 +35,9 @@ def trellis() -> tuple[np.ndarray, np.ndarray]:
     return outputs, next_state
 
 
-_OUTPUTS, _NEXT = trellis()
+#: the code's trellis (:func:`trellis`), shared by this decoder and the BCJR's (:mod:`.bcjr`): coded
+#: outputs per (state, input) as ±1, shape (64, 2, 2), and the next state per (state, input), shape (64, 2)
+OUTPUTS, NEXT_STATE = trellis()
 
 
 @njit(cache=True, nogil=True)
@@ -88,4 +90,4 @@ def viterbi_decode(llr: np.ndarray, n_info: int) -> np.ndarray:
     llr = np.ascontiguousarray(llr[: 2 * n_steps], dtype=np.float64)
     if llr.size < 2 * n_steps:
         raise ValueError(f"need {2 * n_steps} LLRs for {n_info} information bits, got {llr.size}")
-    return _viterbi(llr, _OUTPUTS, n_steps)[:n_info]
+    return _viterbi(llr, OUTPUTS, n_steps)[:n_info]

@@ -34,7 +34,7 @@ _EXPORTS = exports(
         "measure": ("FrameMeasurement", "measure_frame"),
         "records": ("MeasurementRecord", "read_measurements", "write_measurements"),
         "recording": ("receive_file",),
-        "settings": ("Emissions", "ReceiverSettings"),
+        "settings": ("Emissions", "ReceiverSettings", "ReferenceSettings"),
         "stream": ("Receiver", "ReceiverWarning"),
         "two_way": ("two_way_range_m",),
     }

@@ -42,7 +42,16 @@ from ..config import FrameConfig
 from ..transmit.pilot import pilot_symbols
 from ..transmit.pulse import srrc_matrix
 
-__all__ = ["Detection", "PilotDetector", "doppler_bin_spacing_hz", "pilot_template", "z_threshold", "DETECTION_CONTEXT_S"]
+__all__ = [
+    "Detection",
+    "PilotDetector",
+    "doppler_bin_spacing_hz",
+    "pilot_template",
+    "z_threshold",
+    "DETECTION_CONTEXT_S",
+    "cluster_crossings",
+    "first_distinct_peak",
+]
 
 #: the detector's noise context: correlation lags before the scan position whose median sets the noise level [s]
 DETECTION_CONTEXT_S = 0.5
@@ -114,13 +123,15 @@ def _bank_update(c, n_out, b, offset, sample, best, peak):
             peak[j] = power
 
 
-def _cluster_crossings(hit: np.ndarray, amp: np.ndarray, *, lo: int, scan_from: int, window: int, holdoff: int,
-                       final: bool, first_arrival: Callable[[int, int], int]) -> tuple[list[tuple[int, int]], int]:
+def cluster_crossings(hit: np.ndarray, amp: np.ndarray, *, lo: int, scan_from: int, window: int, holdoff: int,
+                      final: bool, first_arrival: Callable[[int, int], int]) -> tuple[list[tuple[int, int]], int]:
     """Group a scan's threshold crossings into arrivals (one per transmission), from ``scan_from`` on.
 
     After the first crossing at or after the scan position, the strongest crossing within ``window``
     lags is found; ``first_arrival(j0, strongest)`` picks the arrival (the direct path may be weaker
-    than an echo); the next arrival is sought ``holdoff`` lags after it.
+    than an echo); the next arrival is sought ``holdoff`` lags after it. Shared by the frame detector
+    (:class:`PilotDetector`) and the reference detector
+    (:class:`~seamodem.receive.reference.ReferenceDetector`).
 
     Parameters
     ----------
@@ -164,13 +175,35 @@ def _cluster_crossings(hit: np.ndarray, amp: np.ndarray, *, lo: int, scan_from: 
             return picks, lo + pos
 
 
-def _first_distinct_peak(amp: np.ndarray, hit: np.ndarray, j0: int, strongest: int, *, fraction: float,
-                         half_lobe: int, gap: int) -> int:
+def first_distinct_peak(amp: np.ndarray, hit: np.ndarray, j0: int, strongest: int, *, fraction: float,
+                        half_lobe: int, gap: int) -> int:
     """Earliest distinct peak in [j0, strongest − gap] strong enough to be the direct path, else ``strongest``.
 
     A distinct peak is a crossing that is the maximum of ``amp`` over ±``half_lobe`` lags, with an
     amplitude of at least ``fraction`` of the strongest; paths closer than ``gap`` lags to the
     strongest are not resolved (noise on the main lobe's flank must not pass for an earlier path).
+    Shared by the frame detector (:class:`PilotDetector`) and the reference detector
+    (:class:`~seamodem.receive.reference.ReferenceDetector`).
+
+    Parameters
+    ----------
+    amp : numpy.ndarray, shape (n_lags,)
+        Correlation amplitude at each lag.
+    hit : numpy.ndarray, bool, shape (n_lags,)
+        Lags that pass the detection tests.
+    j0, strongest : int
+        First crossing and strongest crossing of the cluster [lags, indices into ``amp``].
+    fraction : float
+        Smallest amplitude of the direct path, as a fraction of the strongest's.
+    half_lobe : int
+        Half-width of the main lobe [lags]: a peak is the maximum over ±``half_lobe``.
+    gap : int
+        Paths closer than this to the strongest are not resolved [lags].
+
+    Returns
+    -------
+    int
+        The arrival's lag (``strongest`` when no earlier distinct peak qualifies).
     """
     floor = fraction * amp[strongest]
     w = half_lobe
@@ -343,10 +376,10 @@ class PilotDetector:
         hit = (z >= self.eta) & (rho >= self.min_rho)
 
         def first_arrival(j0: int, strongest: int) -> int:
-            return _first_distinct_peak(amp, hit, j0, strongest, fraction=self.first_path_fraction,
-                                        half_lobe=self.half_lobe, gap=2 * self.half_lobe)
+            return first_distinct_peak(amp, hit, j0, strongest, fraction=self.first_path_fraction,
+                                       half_lobe=self.half_lobe, gap=2 * self.half_lobe)
 
-        picks, resume = _cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
-                                           holdoff=self.holdoff, final=final, first_arrival=first_arrival)
+        picks, resume = cluster_crossings(hit, amp, lo=lo, scan_from=scan_from, window=self.window,
+                                          holdoff=self.holdoff, final=final, first_arrival=first_arrival)
         return [Detection(t_start_s=(lo + j) / self.fs - self.tau_a_s, doppler_hz=float(self.doppler_hz[best[j]]),
                           z=float(z[j]), rho=float(rho[j])) for j, _ in picks], resume

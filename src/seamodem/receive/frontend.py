@@ -33,7 +33,7 @@ from ..config import FrameConfig
 from ..dsp import lowpass_taps
 from ..errors import ConfigError
 
-__all__ = ["FrontEndPlan", "FrontEnd", "plan_front_end"]
+__all__ = ["Branch", "FrontEndPlan", "FrontEnd", "plan_front_end"]
 
 #: Target input block length [samples]; the actual N is a nearby multiple of the decimations. 2¹⁶
 #: (N = 66150 at 96 kHz): the real FFT costs 18–22 ns per sample there against 37 at 2¹⁸ (a 2 MB
@@ -62,7 +62,26 @@ def _smooth5_at_most(n: int) -> int:
 
 
 @dataclass(frozen=True)
-class _Branch:
+class Branch:
+    """One output band of the front end: its centre, filter edges, decimation and low-pass FIR.
+
+    The frame receiver has two (data and tone, :func:`plan_front_end`); the reference
+    receiver one, on the references' band (:func:`~seamodem.receive.reference.plan_band`).
+
+    Parameters
+    ----------
+    centre_hz : float
+        Mixing frequency [Hz].
+    passband_hz : float
+        Half-width kept around the centre [Hz].
+    stopband_hz : float
+        Stop edge of the low-pass filter [Hz].
+    decimation : int
+        D: input samples per output sample.
+    taps : numpy.ndarray
+        Zero-phase low-pass FIR at the input rate (odd length; :func:`~seamodem.dsp.lowpass_taps`).
+    """
+
     centre_hz: float
     passband_hz: float
     stopband_hz: float
@@ -71,6 +90,7 @@ class _Branch:
 
     @property
     def half_length(self) -> int:
+        """Half the FIR's length [input samples]: (len(taps) − 1)/2."""
         return (len(self.taps) - 1) // 2
 
 
@@ -82,7 +102,7 @@ class FrontEndPlan:
     ----------
     fs : float
         Input sample rate [Hz].
-    data, tone : _Branch
+    data, tone : Branch
         Centre, pass and stop edges [Hz], decimation and FIR of each branch.
     block_size : int
         N, input samples per FFT.
@@ -93,8 +113,8 @@ class FrontEndPlan:
     """
 
     fs: float
-    data: _Branch
-    tone: _Branch
+    data: Branch
+    tone: Branch
     block_size: int
     hop: int
     margin: int
@@ -149,8 +169,8 @@ def plan_front_end(config: FrameConfig, fs: float, *, v_max_mps: float, sound_sp
     tone_stop = tone_pass + min(_TONE_TRANSITION_HZ, max(gap - tone_pass, 50.0) / 2)
     d_data = max(1, int(fs // (2 * data_stop)))
     d_tone = d_data * max(1, _smooth5_at_most(int(fs // (2 * tone_stop)) // d_data))
-    data = _Branch(config.carrier_hz, half_band, data_stop, d_data, lowpass_taps(fs, half_band, data_stop))
-    tone = _Branch(config.tone_hz, tone_pass, tone_stop, d_tone, lowpass_taps(fs, tone_pass, tone_stop))
+    data = Branch(config.carrier_hz, half_band, data_stop, d_data, lowpass_taps(fs, half_band, data_stop))
+    tone = Branch(config.tone_hz, tone_pass, tone_stop, d_tone, lowpass_taps(fs, tone_pass, tone_stop))
     longest = max(data.half_length, tone.half_length)
     margin = d_tone * math.ceil(longest / d_tone)
     n_blocks_of_tone = max(4 * margin // d_tone + 1, _BLOCK_TARGET // d_tone)
@@ -178,7 +198,7 @@ def _frequency_response(taps: np.ndarray, n: int) -> np.ndarray:
 class _BranchExtractor:
     """Bins, mask and phase ramp of one branch for blocks of the plan's size."""
 
-    def __init__(self, branch: _Branch, plan: FrontEndPlan):
+    def __init__(self, branch: Branch, plan: FrontEndPlan):
         n = plan.block_size
         self.m = n // branch.decimation
         self.decimation = branch.decimation

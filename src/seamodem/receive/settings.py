@@ -3,14 +3,24 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["ReceiverSettings", "Emissions"]
+__all__ = ["ReceiverSettings", "ReferenceSettings", "Emissions", "MIN_RHO", "MAX_ACCEL_MPS2", "REFERENCE_V_MAX_LIMIT_MPS"]
+
+#: smallest normalised correlation of a reference detection: ≈ S/(S + N) in the baseband's band, so detection
+#: reaches in-band SNRs near −10 dB, while an impulse of k samples in a ping of N gives ρ ≈ k/N (≈ 0.02 for a
+#: 1 ms snap in a 50 ms ping); unlike the frame detector, a ping has no data of its own to reject
+MIN_RHO = 0.05
+#: largest radial acceleration assumed over a pre/postamble packet [m/s²]
+#: (:func:`~seamodem.receive.reference.pair_up`)
+MAX_ACCEL_MPS2 = 0.3
+#: the reference receiver searches |v_r| below this [m/s] (its scale bank and band plan)
+REFERENCE_V_MAX_LIMIT_MPS = 100.0
 
 
 def _positive(name: str, value) -> None:
@@ -108,6 +118,84 @@ class ReceiverSettings:
     def to_dict(self) -> dict[str, Any]:
         """Plain values (for headers and the identity of batch parts)."""
         return asdict(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReferenceSettings(ReceiverSettings):
+    """:class:`ReceiverSettings` of the reference (known-waveform) receiver, with what it adds.
+
+    The reference receiver (:class:`~seamodem.receive.reference.ReferenceReceiver`) uses
+    ``sound_speed_mps``, ``clock_offset_s``, ``v_max_mps`` and ``false_alarms_per_hour`` (shared
+    among the references and channels searched); the frame receiver's decoding and blanking fields
+    are not used. Validated once, on construction, with the frame receiver's rules and these:
+    |v_r| searched below :data:`REFERENCE_V_MAX_LIMIT_MPS`, no two-way ranging, no decoding.
+
+    Parameters
+    ----------
+    min_rho : float
+        Smallest normalised correlation of a detection, in [0, 1] (0: the ρ test off).
+    max_accel_mps2 : float
+        Largest radial acceleration over a pre/postamble packet [m/s²], in [0, 100);
+        0 states a constant speed (:func:`~seamodem.receive.reference.pair_up`).
+
+    Examples
+    --------
+    >>> s = ReferenceSettings(v_max_mps=6.0, sound_speed_mps=1500.0)
+    >>> s.eps_max, s.min_rho
+    (0.004, 0.05)
+    >>> ReferenceSettings.from_settings(ReceiverSettings(v_max_mps=3.0)).v_max_mps
+    3.0
+    >>> ReferenceSettings(v_max_mps=150.0)
+    Traceback (most recent call last):
+    ...
+    seamodem.errors.ConfigError: v_max: must be below 100 m/s with reference waveforms, got 150.0
+    """
+
+    min_rho: float = MIN_RHO
+    max_accel_mps2: float = MAX_ACCEL_MPS2
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not self.v_max_mps < REFERENCE_V_MAX_LIMIT_MPS:
+            raise ConfigError(
+                "v_max", f"must be below {REFERENCE_V_MAX_LIMIT_MPS:g} m/s with reference waveforms, got {self.v_max_mps!r}"
+            )
+        if self.turnaround_s is not None:
+            raise ConfigError("turnaround", "two-way ranging is not available with reference waveforms")
+        if self.decode:
+            raise ConfigError("decode", "reference waveforms carry no payload to decode")
+        a = self.max_accel_mps2
+        if isinstance(a, bool) or not (isinstance(a, (int, float)) and math.isfinite(a) and 0 <= a < 100):
+            raise ConfigError("max_accel", f"must be in [0, 100) m/s², got {a!r}")
+        r = self.min_rho
+        if isinstance(r, bool) or not (isinstance(r, (int, float)) and 0 <= r <= 1):
+            raise ConfigError("min_rho", f"must be in [0, 1], got {r!r}")
+
+    @classmethod
+    def from_settings(cls, settings: ReceiverSettings, **changes: Any) -> ReferenceSettings:
+        """The reference settings holding every field of ``settings`` (validated again), with ``changes``.
+
+        Parameters
+        ----------
+        settings : ReceiverSettings
+            Receiver settings; a :class:`ReferenceSettings` keeps its own fields.
+        **changes
+            Fields to replace (``min_rho``, ``max_accel_mps2``, ``v_max_mps``, …).
+
+        Returns
+        -------
+        ReferenceSettings
+            ``settings`` itself when it already is one and nothing changes.
+        """
+        if isinstance(settings, cls) and not changes:
+            return settings
+        values = {f.name: getattr(settings, f.name) for f in fields(settings)}
+        return cls(**{**values, **changes})
+
+    @property
+    def eps_max(self) -> float:
+        """Largest |ε| = v_max/c searched (Doppler scale, dimensionless)."""
+        return self.v_max_mps / self.sound_speed_mps
 
 
 @dataclass(frozen=True)
