@@ -66,7 +66,8 @@ def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True) ->
             row.update(range_m=r.range_m, v_r_mps=r.v_r_mps, sigma_range_m=r.sigma_range_m,
                        sigma_v_r_mps=r.sigma_v_r_mps, v_r_source=r.v_r_source, crc_ok=bool(r.crc_ok),
                        snr_db=r.snr_db, v_r_tone_mps=r.v_r_tone_mps, v_r_bank_mps=r.v_r_bank_mps,
-                       sigma_v_r_bank_mps=r.sigma_v_r_bank_mps)
+                       sigma_v_r_bank_mps=r.sigma_v_r_bank_mps,
+                       **{f"rec_{k}": v for k, v in r.to_dict().items() if k not in ("payload_hex", "payload_text")})
         rows.append(row)
     return rows
 
