@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from ..settings import MAX_ACCEL_MPS2
+from .packets import assemble_packets
 from .records import FittedPing
 
 __all__ = ["pair_doppler", "pair_up", "MAX_ACCEL_MPS2"]
@@ -48,22 +49,22 @@ def pair_doppler(
 
 def pair_up(found: list[FittedPing], *, eps_max: float, max_accel_mps2: float = MAX_ACCEL_MPS2,
             sound_speed_mps: float = 1500.0) -> None:
-    """Mark pre/postamble pairs of references with ``postamble_s`` and set their pair Doppler (in place).
+    """Group the chirps of every packet (pre/postamble pairs, trains) and set their packet Doppler (in place).
 
     Each ping's ridge coordinate r = t_a + g·ε is measured to its known-ε bound (≈ 1 µs), far better than
-    t_a (its Doppler error slides it along the ridge). With the Doppler changing over the packet,
-    ε_pre = ε̄ − δ, ε_post = ε̄ + δ (δ = a·T_sp/(2c)), the ridge spacing is Δ + 2gδ, Δ = T_sp/(1 + ε̄) the
-    arrivals' spacing. δ is estimated from the pings' own ε's, (ε̂_post − ε̂_pre)/2, shrunk towards 0 by a
-    uniform prior |a| ≤ ``max_accel_mps2`` (best linear estimate; the pings' own ε's dominate when they
-    are precise, the prior when they are not, as an HFM's). Then ε̄ = T_sp/(r_post − r_pre − 2gδ̃) − 1 with
-    σ_ε̄ = (T_sp/Δ²)·√(σ_r,pre² + σ_r,post² + 4g²·var δ̃) (:func:`pair_doppler` for the spacing alone).
-    Each ping's arrival on its ridge at its own ε̄ ∓ δ̃: t = r − g·(ε̄ ∓ δ̃).
+    t_a (its Doppler error slides it along the ridge). The chirps of a packet are grouped by their expected
+    spacings over all detections (a global assignment: other pings between them and a missing chirp do not
+    break a packet), and the packet's scale ε(T) = ε0 + ε1·T is fitted to all their ridge coordinates and
+    their own ε's, with a uniform prior |a| ≤ ``max_accel_mps2`` on the acceleration
+    (:mod:`~seamodem.receive.reference.packets`). Each chirp's arrival is its ridge coordinate at the
+    packet's ε at its emission. A packet found incomplete warns naming the reference
+    (:class:`~seamodem.receive.reference.packets.PacketWarning`).
 
     Parameters
     ----------
     found : list of FittedPing
-        Fitted detections (any references; those without a postamble are left alone). Pairs get
-        ``role``, ``eps_pair``, ``sigma_eps_pair``, ``t_pair_s`` and ``sigma_t_pair_s``.
+        Fitted detections (any references; lone pings are left alone). A packet's chirps get
+        ``role``, ``train_position``, ``offset_s``, ``eps_pair``, ``sigma_eps_pair``, ``t_pair_s`` and ``sigma_t_pair_s``.
     eps_max : float
         Largest |ε| searched (v_max/c): how far a pair's spacing may be from T_sp.
     max_accel_mps2 : float
@@ -76,35 +77,4 @@ def pair_up(found: list[FittedPing], *, eps_max: float, max_accel_mps2: float = 
     None
         ``found``'s items are updated in place.
     """
-    by_ref: dict[str, list[FittedPing]] = {}
-    for f in found:
-        if f.reference.postamble_s:
-            by_ref.setdefault(f.reference.name, []).append(f)
-    for items in by_ref.values():
-        items.sort(key=lambda f: f.fit.t_arrival_s)
-        i = 0
-        while i < len(items) - 1:
-            a, b = items[i], items[i + 1]
-            sp = a.reference.postamble_s
-            delta = b.fit.ridge_t_s - a.fit.ridge_t_s
-            if abs(delta - sp) <= 2 * eps_max * sp + 0.01 * a.reference.duration_s:
-                g = a.fit.ridge_slope_s
-                var_prior = (max_accel_mps2 * sp / (2 * sound_speed_mps)) ** 2 / 3
-                var_own = (a.fit.sigma_eps**2 + b.fit.sigma_eps**2) / 4
-                gain = var_prior / (var_prior + var_own) if var_prior + var_own > 0 else 0.0
-                half_change = gain * (b.fit.eps - a.fit.eps) / 2
-                var_half = var_prior * var_own / (var_prior + var_own) if var_prior + var_own > 0 else 0.0
-                spacing = delta - 2 * g * half_change
-                eps, sigma = pair_doppler(
-                    a.fit.ridge_t_s, a.fit.ridge_t_s + spacing,
-                    a.fit.sigma_ridge_s, math.hypot(b.fit.sigma_ridge_s, 2 * g * math.sqrt(var_half)), spacing_s=sp,
-                )
-                a.role, b.role = "preamble", "postamble"
-                for f, sign in ((a, -1.0), (b, 1.0)):
-                    f.eps_pair, f.sigma_eps_pair = eps, sigma
-                    # the ping's own ε moves its arrival along the ridge; the pair's ε puts it back (HFM coupling)
-                    f.t_pair_s = f.fit.ridge_t_s - g * (eps + sign * half_change)
-                    f.sigma_t_pair_s = math.hypot(f.fit.sigma_ridge_s, g * math.hypot(sigma, math.sqrt(var_half)))
-                i += 2
-            else:
-                i += 1
+    assemble_packets(found, eps_max=eps_max, max_accel_mps2=max_accel_mps2, sound_speed_mps=sound_speed_mps)

@@ -34,11 +34,16 @@ class ReferenceRecord(MeasurementRecord):
     misfit : float
         Residual χ² per sample over the noise (≈ 1 when only noise is left); σ's are inflated by √misfit.
     role : str
-        "ping", "preamble" or "postamble". For a pair, ``t_arrival_s`` (and so ``tof_s``, ``range_m`` and
-        ``sigma_range_m``) uses the pair's Doppler to place the arrival on the ping's delay–Doppler
-        ridge when that is the more accurate (always for an HFM); ``v_r_mps`` stays the ping's own.
+        "ping", "preamble" or "postamble". For a chirp of a packet (pre/postamble pair or trains),
+        ``t_arrival_s`` (and so ``tof_s``, ``range_m`` and ``sigma_range_m``) uses the packet's Doppler to
+        place the arrival on the ping's delay–Doppler ridge when that is the more accurate, and so do
+        ``v_r_mps`` and ``sigma_v_r_mps``: the packet's Doppler at the chirp (``v_r_source`` "packet"; the
+        ping's own Doppler stays in ``v_r_bank_mps``).
+    train_position : int
+        The chirp's place in its train (0: first; always 0 for a lone ping).
     v_r_pair_mps, sigma_v_r_pair_mps : float
-        Doppler from the measured pre/postamble spacing and its σ [m/s] (NaN for lone pings).
+        The packet's mean Doppler over its span from the chirps' measured spacings (pre/postamble, trains)
+        and its σ [m/s] (NaN for lone pings).
     clipped_samples : int
         Clipped input samples within the ping.
     """
@@ -48,6 +53,7 @@ class ReferenceRecord(MeasurementRecord):
     e_n0_db: float = math.nan
     misfit: float = math.nan
     role: str = "ping"
+    train_position: int = 0
     v_r_pair_mps: float = math.nan
     sigma_v_r_pair_mps: float = math.nan
     clipped_samples: int = 0
@@ -78,9 +84,17 @@ class FittedPing:
     role : str
         "ping", "preamble" or "postamble".
     eps_pair, sigma_eps_pair : float
-        Doppler scale ε from the pair's spacing and its σ (NaN for lone pings).
+        Doppler scale ε of its packet, the mean over the packet from the chirps' spacings, and its σ (NaN
+        for lone pings).
+    eps_chirp, sigma_eps_chirp : float
+        The packet's ε at this chirp's emission (its change over the packet fitted, within the acceleration
+        prior) and its σ (NaN for lone pings).
     t_pair_s, sigma_t_pair_s : float
-        Arrival placed on the ridge at the pair's ε, and its σ [s] (NaN for lone pings).
+        Arrival placed on the ridge at the packet's ε, and its σ [s] (NaN for lone pings).
+    train_position : int
+        Place of the chirp in its train (0: the first).
+    offset_s : float
+        Emission offset of the chirp from its packet's first chirp [s].
     """
 
     reference: ReferenceWaveform
@@ -93,6 +107,10 @@ class FittedPing:
     sigma_eps_pair: float = math.nan
     t_pair_s: float = math.nan
     sigma_t_pair_s: float = math.nan
+    eps_chirp: float = math.nan
+    sigma_eps_chirp: float = math.nan
+    train_position: int = 0
+    offset_s: float = 0.0
 
 
 def to_record(f: FittedPing, emissions, *, sound_speed_mps: float, clock_offset_s: float = 0.0, source: str = "") -> ReferenceRecord:
@@ -124,27 +142,29 @@ def to_record(f: FittedPing, emissions, *, sound_speed_mps: float, clock_offset_
     if emissions is None:
         k, t_emit = -1, math.nan
     else:
-        t_emit_arrival = fit.t_arrival_s - (f.reference.postamble_s if f.role == "postamble" else 0.0)
-        k, t_emit = emissions.frame_for(t_emit_arrival - clock_offset_s)
-        if f.role == "postamble" and k >= 0:
-            t_emit += f.reference.postamble_s
+        k, t_emit = emissions.frame_for(fit.t_arrival_s - f.offset_s - clock_offset_s)
+        if k >= 0:
+            t_emit += f.offset_s
     tof = fit.t_arrival_s - t_emit - clock_offset_s
+    eps, sigma_eps, source = fit.eps, fit.sigma_eps, "bank"
+    if math.isfinite(f.eps_chirp) and f.sigma_eps_chirp < fit.sigma_eps:
+        eps, sigma_eps, source = f.eps_chirp, f.sigma_eps_chirp, "packet"
     return ReferenceRecord(
         frame_index=k,
         t_emit_s=t_emit,
         t_arrival_s=fit.t_arrival_s,
         tof_s=tof,
         range_m=c * tof,
-        v_r_mps=fit.eps * c,
+        v_r_mps=eps * c,
         snr_db=fit.snr_db,
         v_r_tone_eq9_mps=math.nan,
         v_r_bank_mps=fit.eps * c,
-        v_r_source="bank",
+        v_r_source=source,
         n_paths=fit.n_paths,
         detection_z=f.detection.z,
         detection_rho=f.detection.rho,
         sigma_range_m=c * fit.sigma_t_s,
-        sigma_v_r_mps=c * fit.sigma_eps,
+        sigma_v_r_mps=c * sigma_eps,
         sigma_v_r_bank_mps=c * fit.sigma_eps,
         tone_c_n0_dbhz=math.nan,
         source=source,
@@ -153,6 +173,7 @@ def to_record(f: FittedPing, emissions, *, sound_speed_mps: float, clock_offset_
         e_n0_db=10 * math.log10(max(fit.e_n0, 1e-30)),
         misfit=fit.misfit,
         role=f.role,
+        train_position=f.train_position,
         v_r_pair_mps=f.eps_pair * c,
         sigma_v_r_pair_mps=f.sigma_eps_pair * c,
         clipped_samples=f.clipped,
