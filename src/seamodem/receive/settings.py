@@ -265,3 +265,61 @@ class Emissions:
     def to_list(self) -> list:
         """Plain values (for the identity of batch parts)."""
         return [None if self.times_s is None else self.times_s.tolist(), self.start_s, self.period_s]
+
+
+#: c outside this range is refused unless forced: seawater is 1440–1560 m/s, fresh water ≈ 1400–1500 m/s
+PLAUSIBLE_SOUND_SPEED_MPS = (1400.0, 1600.0)
+#: c when neither the user nor the recording's sidecar gives one [m/s]
+DEFAULT_SOUND_SPEED_MPS = 1500.0
+
+
+def resolve_sound_speed(given: float | None, sidecar: dict | None, *, force: bool = False) -> tuple[float, str]:
+    """The sound speed a receiver uses, in every mode: the option, else the recording's sidecar, else 1500 m/s.
+
+    Parameters
+    ----------
+    given : float or None
+        The user's value (``--sound-speed``) [m/s].
+    sidecar : dict or None
+        The recording's sidecar: ``channel.sound_speed_mps`` (written by ``seamodem channel``), else a
+        top-level ``sound_speed_mps``.
+    force : bool
+        Accept a value outside :data:`PLAUSIBLE_SOUND_SPEED_MPS` (``--force-sound-speed``).
+
+    Returns
+    -------
+    sound_speed_mps : float
+        c [m/s].
+    origin : str
+        Where it came from: "option", "sidecar" or "default" (say so to the user: ranges scale with it).
+
+    Raises
+    ------
+    ConfigError
+        Not a positive finite number, or outside 1400–1600 m/s without ``force``.
+
+    Examples
+    --------
+    >>> resolve_sound_speed(None, {"channel": {"sound_speed_mps": 1496.99}})
+    (1496.99, 'sidecar')
+    >>> resolve_sound_speed(None, None)
+    (1500.0, 'default')
+    """
+    if given is not None:
+        value, origin = given, "option"
+    else:
+        side = sidecar if isinstance(sidecar, dict) else {}
+        channel = side.get("channel") if isinstance(side.get("channel"), dict) else {}
+        value = channel.get("sound_speed_mps", side.get("sound_speed_mps"))
+        value, origin = (DEFAULT_SOUND_SPEED_MPS, "default") if value is None else (value, "sidecar")
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError("sound_speed", f"must be a number of m/s, got {value!r} (from the {origin})") from None
+    if not (math.isfinite(value) and value > 0):
+        raise ConfigError("sound_speed", f"must be a positive number of m/s, got {value!r} (from the {origin})")
+    lo, hi = PLAUSIBLE_SOUND_SPEED_MPS
+    if not force and not lo <= value <= hi:
+        raise ConfigError("sound_speed", f"{value:g} m/s (from the {origin}) is outside {lo:g}–{hi:g} m/s, "
+                          "implausible in water; give --force-sound-speed to use it anyway")
+    return value, origin
