@@ -119,17 +119,30 @@ class DemoConfig:
         return get_preset(self.preset)
 
     def path(self):
-        """The desired survey path (:class:`seamodem.navigation.trajectories.SegmentPath`)."""
+        """The desired survey path.
+
+        Returns
+        -------
+        SegmentPath
+            The boustrophedon (:func:`seamodem.navigation.trajectories.boustrophedon`), positions in [m].
+        """
         from ..navigation.trajectories import boustrophedon
 
         return boustrophedon(width_m=self.width_m, lane_length_m=self.lane_length_m, n_lanes=self.n_lanes,
                              y0_m=0.0, speed_mps=self.speed_mps)
 
     def mission_s(self) -> float:
+        """The mission's length [s]: ``duration_s``, or the whole survey's duration."""
         return self.path().duration_s if self.duration_s is None else float(self.duration_s)
 
     def frame_count(self) -> int:
-        """Frames emitted at 0, T_com, … strictly before the mission's end."""
+        """Frames emitted at 0, T_com, … strictly before the mission's end.
+
+        Returns
+        -------
+        int
+            At least 1.
+        """
         return max(1, math.ceil(self.mission_s() / self.tcom_s - 1e-9))
 
 

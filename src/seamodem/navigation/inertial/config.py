@@ -158,7 +158,22 @@ class InertialConfig:
 
     @classmethod
     def from_noise_model(cls, noise, dt_s: float, **overrides) -> "InertialConfig":
-        """Densities from the per-sample standard deviations of a :class:`~seamodem.navigation.montecarlo.NoiseModel` at step ``dt_s``."""
+        """Densities from the per-sample standard deviations of a :class:`~seamodem.navigation.montecarlo.NoiseModel`.
+
+        Parameters
+        ----------
+        noise : NoiseModel
+            Per-sample standard deviations of the heading [deg], gyro [rad/s], accelerometer [m/s²] and the
+            heading drift [deg/h].
+        dt_s : float
+            IMU step [s].
+        **overrides
+            Other fields of :class:`InertialConfig`.
+
+        Returns
+        -------
+        InertialConfig
+        """
         root = math.sqrt(dt_s)
         values = dict(gyro_arw=noise.sigma_omega_rad_s * root, accel_vrw=noise.sigma_accel_mps2 * root,
                       heading_sigma_rad=max(math.radians(noise.sigma_heading_deg), 1e-9),
@@ -205,8 +220,24 @@ class InertialConfig:
     def initial(self, x_m, y_m, heading_rad, speed_mps, *, heading_from_sensor: bool = True):
         """Initial state and covariance at a start fix.
 
-        ``heading_rad`` is the sensor's reading (ψ + b) when ``heading_from_sensor``: the start heading then
-        also carries the bias uncertainty, correlated with it.
+        Parameters
+        ----------
+        x_m, y_m : float
+            Start position [m].
+        heading_rad : float
+            Start heading [rad]: the sensor's reading (ψ + b) when ``heading_from_sensor``, the start heading
+            then also carrying the bias uncertainty, correlated with it.
+        speed_mps : float
+            Start speed [m/s].
+        heading_from_sensor : bool
+            Whether ``heading_rad`` is the heading sensor's reading.
+
+        Returns
+        -------
+        z : ndarray, shape (n,)
+            Cartesian initial state.
+        P : ndarray, shape (n, n)
+            Its covariance.
         """
         n = self.n_states
         z = np.zeros(n)
@@ -236,8 +267,20 @@ class InertialConfig:
         return -math.inf if self.min_speed_mps is None else float(self.min_speed_mps)
 
     def window(self, dof: int) -> tuple[float, float]:
-        """(window length [s], NIS threshold) of the window re-linearization for a frame of ``dof`` rows;
-        (0, inf) when it is off."""
+        """The window re-linearization's length and threshold for a frame of ``dof`` rows.
+
+        Parameters
+        ----------
+        dof : int
+            Rows of the acoustic update (1 or 2).
+
+        Returns
+        -------
+        window_s : float
+            Window length [s]; 0 when the re-linearization is off.
+        nis : float
+            NIS threshold; inf when off.
+        """
         if self.window_probability is None or self.window_s == 0:
             return 0.0, math.inf
         return self.window_s, CHI2_GATE[self.window_probability][dof - 1]
