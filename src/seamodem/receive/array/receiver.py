@@ -213,7 +213,11 @@ def receive_array_file(
         raise InputFileError(f"{path}: has {source.n_channels} channel(s), the array {n_el} elements")
     if geometry.ambiguity:
         warnings.warn(geometry.ambiguity, ReceiverWarning, stacklevel=2)
-    x = np.concatenate(list(source.blocks(list(range(n_el)))), axis=0)
+    x = np.empty((source.n_samples, n_el))  # filled block by block: one copy of the recording in memory
+    pos = 0
+    for block in source.blocks(list(range(n_el))):
+        x[pos:pos + len(block)] = block
+        pos += len(block)
     fs = source.sample_rate_hz
     records, _ = receive_array(x, float(fs), config, positions_m, emissions=emissions, settings=settings,
                                complex_gains=complex_gains, position_sigma_m=position_sigma_m, pilot=pilot,
