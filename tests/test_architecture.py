@@ -170,8 +170,81 @@ def test_import_seamodem_is_lazy_and_every_public_name_resolves():
     assert set(seamodem.__all__) <= set(namespace)
 
 
+def _imported_names(module_level: bool = False):
+    """(importing module, imported module, name) for every ``from seamodem... import name``."""
+    files = {_module_name(p): p for p in ROOT.rglob("*.py")}
+    for name, path in files.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in _top_level_imports(ast.parse(path.read_text(encoding="utf-8")), module_level=module_level):
+            if isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    anchor = package.split(".")
+                    anchor = anchor[: len(anchor) - node.level + 1]
+                    base = ".".join(anchor + ([base] if base else []))
+                for alias in node.names:
+                    yield name, base, alias.name, files
+
+
+def private_imports() -> list[tuple[str, str, str]]:
+    """Underscored names (not modules, not dunders) that one seamodem module imports from another."""
+    return sorted((src, base, n) for src, base, n, files in _imported_names()
+                  if base.startswith("seamodem") and n.startswith("_") and not n.startswith("__")
+                  and f"{base}.{n}" not in files)
+
+
+#: the layers, lowest first: a package imports only from layers below its own (leaves among themselves)
+LAYERS = [
+    {"errors", "_version", "_lazy", "_progress", "config", "dsp", "io"},
+    {"plots"},
+    {"transmit"},
+    {"channel", "decode"},
+    {"receive"},
+    {"batch"},
+    {"navigation", "studies"},
+    {"demo"},
+    {"cli"},
+    {"__main__"},
+]
+
+
+def back_arrows() -> list[tuple[str, str]]:
+    """Imports that climb the layers, or reach the root facade ``seamodem`` from inside the package."""
+    rank = {pkg: i for i, layer in enumerate(LAYERS) for pkg in layer}
+    out = set()
+    for src, base, _, _ in _imported_names():
+        if not base.startswith("seamodem") or src == "seamodem":
+            continue
+        a, b = src.split(".")[1], (base.split(".") + [""])[1]
+        if b == "":  # the root package itself
+            out.add((src, base))
+        elif a != b and not (rank[b] < rank[a] or rank[a] == rank[b] == 0):
+            out.add((src, base))
+    return sorted(out)
+
+
+def test_the_private_name_scan_finds_one(tmp_path):
+    # the scan's own check: the old receive/reference.py imported detect._cluster_crossings
+    tree = ast.parse("from .detect import _cluster_crossings, first_distinct_peak\nfrom .. import __version__\n")
+    names = [(n.module, a.name) for n in _top_level_imports(tree, module_level=False) for a in n.names]
+    assert ("detect", "_cluster_crossings") in names
+
+
+def test_no_private_name_is_imported_across_modules():
+    assert private_imports() == []
+
+
+def test_every_package_is_in_a_layer_and_no_import_climbs_them():
+    packages = {p.name if p.is_dir() else p.stem for p in ROOT.iterdir()
+                if (p.is_dir() and (p / "__init__.py").exists()) or (p.suffix == ".py" and p.stem != "__init__")}
+    assert packages <= {pkg for layer in LAYERS for pkg in layer}, packages
+    assert back_arrows() == []
+
+
 if __name__ == "__main__":
     for level in (True, False):
         print("module-level imports:" if level else "all imports, those in functions too:")
         for cycle in import_cycles(import_graph(module_level=level)):
             print("   ", " <-> ".join(cycle))
+    print("private names imported across modules:", private_imports() or "none")
+    print("imports climbing the layers:", back_arrows() or "none")
