@@ -8,7 +8,12 @@ part. Outputs compared byte for byte (times and paths left out):
   ``nav simulate --tcom 3 20 --runs 30 --seed 1``: table.csv, fig7, fig8;
 - ``ber --snr 2 6 --frames 10 --seed 3``: ber.csv;
 - ``tx`` 6 frames → ``channel`` examples/scenarios/doppler_profile.toml → ``rx``: the records;
+- ``rx --array tetra:0.08`` on the same frames through the channel on 4 elements: the records;
+- ``tx --reference`` LFM and HFM → ``channel`` → ``rx --reference``: the records;
 - ``demo --duration 30``: every CSV and figure, summary.json without its wall times.
+
+Speed: real-time factors of ``rx`` (measurement only, with decoding, ``--array``, ``--reference``) on
+60 s recordings, interleaved between the revisions, best of 2.
 
 Shape figures: the largest modules' line counts, the import cycles the scan of
 the newer revision's tests/test_architecture.py finds in each, ``duplicates``
@@ -70,6 +75,21 @@ def outputs(tree: Path, work: Path) -> dict[str, bytes]:
     seamodem(tree, "rx", work / "rx.wav", "-o", work / "records.csv", "-q")
     text = (work / "records.csv").read_text(encoding="utf-8") if (work / "records.csv").exists() else ""
     out["rx doppler_profile records"] = "\n".join(r for r in text.splitlines() if not r.startswith("#")).encode()
+    # the array receiver: 4 elements through the channel, rx --array (records, less the run's wall time)
+    seamodem(tree, "channel", work / "tx.wav", "--scenario", tree / "examples/scenarios/doppler_profile.toml",
+             "--array", "tetra:0.08", "-o", work / "rx4.wav", "-q")
+    seamodem(tree, "rx", work / "rx4.wav", "--array", "tetra:0.08", "-o", work / "array.csv", "-q")
+    out["rx --array records"] = (work / "array.csv").read_bytes() if (work / "array.csv").exists() else b"(missing)"
+    # the reference receiver: LFM and HFM pings and a pre/postamble pair through the channel
+    for name, spec in (("lfm", "lfm:18000-30000:0.08"), ("hfm", "hfm:19000-29000:0.05")):
+        seamodem(tree, "tx", "--reference", spec, "--count", 8, "--period", 2, "--start", 0.2,
+                 "-o", work / f"{name}.wav", "-q")
+        seamodem(tree, "channel", work / f"{name}.wav", "--scenario",
+                 tree / "examples/scenarios/doppler_profile.toml", "-o", work / f"{name}_rx.wav", "-q")
+        seamodem(tree, "rx", work / f"{name}_rx.wav", "--reference", work / f"{name}_rx.json",
+                 "-o", work / f"{name}.csv", "-q")
+        f = work / f"{name}.csv"
+        out[f"rx --reference {name} records"] = f.read_bytes() if f.exists() else b"(missing)"
     seamodem(tree, "demo", "--duration", 30, "-o", work / "demo")
     for f in sorted((work / "demo").glob("*")):
         if f.name == "summary.json":
@@ -118,12 +138,37 @@ def timings(trees: dict[str, Path], work: Path) -> dict[str, dict[str, str]]:
                 subprocess.run([sys.executable, "-c", "import seamodem.cli.rx, scipy.signal, numba; "
                                 "from seamodem import receive_file"], env={**os.environ, "PYTHONPATH": str(tree / "src")})
                 runs[k]["imports"].append(time.perf_counter() - start)
+    # real-time factors (recording seconds over wall seconds), interleaved between the revisions, best of 2
+    beacon, rec = work / "rt_tx.wav", work / "rt_rx.wav"
+    first = next(iter(trees.values()))
+    seamodem(first, "tx", "--count", 20, "--period", 3, "-o", beacon, "-q")
+    seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/doppler_profile.toml", "-o", rec, "-q")
+    seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/doppler_profile.toml",
+             "--array", "tetra:0.08", "-o", work / "rt_rx4.wav", "-q")
+    seamodem(first, "tx", "--reference", "lfm:18000-30000:0.08", "--count", 20, "--period", 3, "--start", 0.2,
+             "-o", work / "rt_ref.wav", "-q")
+    seamodem(first, "channel", work / "rt_ref.wav", "--scenario", first / "examples/scenarios/doppler_profile.toml",
+             "-o", work / "rt_ref_rx.wav", "-q")
+    duration = sf.info(str(rec)).duration
+    modes = {"rx measurement only": [rec, "--no-decode"], "rx with decoding": [rec],
+             "rx --array (decoding)": [work / "rt_rx4.wav", "--array", "tetra:0.08"],
+             "rx --reference": [work / "rt_ref_rx.wav", "--reference", work / "rt_ref_rx.json"]}
+    rt = {k: {m: [] for m in modes} for k in trees}
+    for k, tree in trees.items():  # warm the numba caches of each export
+        for m, a in modes.items():
+            seamodem(tree, "rx", *a, "-o", work / "rt.csv", "-q")
+    for _ in range(2):
+        for m, a in modes.items():
+            for k, tree in trees.items():
+                rt[k][m].append(seamodem(tree, "rx", *a, "-o", work / "rt.csv", "-q"))
     out = {}
     for k, r in runs.items():
         rx, imp = min(r["rx"]), min(r["imports"])
         out[k] = {"seamodem --help [s], median of 5": f"{statistics.median(r['help']):.3f}",
                   "rx one-line error [s], median of 5": f"{statistics.median(r['error']):.3f}",
-                  "rx 30 s noise [s], best of 2 (start-up share)": f"{rx:.2f} ({100 * imp / rx:.0f} %)"}
+                  "rx 30 s noise [s], best of 2 (start-up share)": f"{rx:.2f} ({100 * imp / rx:.0f} %)",
+                  **{f"{m}, {duration:.0f} s recording: real time, best of 2": f"{duration / min(v):.1f}x"
+                     for m, v in rt[k].items()}}
     return out
 
 
