@@ -16,11 +16,9 @@ from pathlib import Path
 
 from ..errors import InputFileError, SeamodemError
 from ..io.files import check_writable
-from ._common import command_line
+from ._common import DEFAULT_SOUND_SPEED_MPS, command_line, emit_schedule
 
 __all__ = ["add_reference_options", "run_reference", "write_reference_records"]
-
-DEFAULT_SOUND_SPEED_MPS = 1500.0
 
 
 def add_reference_options(p: argparse.ArgumentParser) -> None:
@@ -66,15 +64,13 @@ def add_reference_options(p: argparse.ArgumentParser) -> None:
     p.set_defaults(run=run)
 
 
-def _emissions(args, sidecar: dict | None, references) -> dict:
+def _reference_emissions(args, sidecar: dict | None, references) -> dict:
     """Emissions per reference name (None when unknown)."""
     from ..receive.settings import Emissions
 
-    if args.emit_start is not None or args.emit_period is not None:
-        if args.emit_start is None or args.emit_period is None:
-            raise SeamodemError("emit-start: --emit-start and --emit-period go together")
-        e = Emissions(start_s=args.emit_start, period_s=args.emit_period)
-        return {r.name: e for r in references}
+    given = emit_schedule(args)
+    if given is not None:
+        return {r.name: given for r in references}
     out = {}
     for r in references:
         times = [float(f["t_emit_s"]) for f in (sidecar or {}).get("frames", [])
@@ -132,7 +128,8 @@ def run_reference(args: argparse.Namespace) -> int:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
     recording = Path(args.recording[0])
 
-    from ..io.mat import RecordingWarning, open_recording
+    from ..io.source import open_recording
+    from ..io.wav import RecordingWarning
     from ..transmit.reference import load_references
 
     with warnings.catch_warnings(record=True) as caught:
@@ -148,7 +145,7 @@ def run_reference(args: argparse.Namespace) -> int:
     sound_speed = args.sound_speed if args.sound_speed is not None else DEFAULT_SOUND_SPEED_MPS
     if not (math.isfinite(sound_speed) and sound_speed > 0):
         raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
-    emissions = _emissions(args, sidecar, references)
+    emissions = _reference_emissions(args, sidecar, references)
 
     from ..receive.reference import (
         MAX_ACCEL_MPS2,
@@ -174,7 +171,7 @@ def run_reference(args: argparse.Namespace) -> int:
     for f in found:
         f.channel = channels[f.channel]
         lo = int(f.fit.t_arrival_s * source.sample_rate_hz)
-        f.clipped = source.clips.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
+        f.clipped = source.stats.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
     found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
     found = keep_matching_reference(found)
     max_accel = MAX_ACCEL_MPS2 if args.max_accel is None else args.max_accel
@@ -199,7 +196,7 @@ def run_reference(args: argparse.Namespace) -> int:
         "snr_definition": "in-band SNR over the reference's band [f_low, f_high] during the ping; E/N0 = SNR·B·T",
     }
     n = write_reference_records(out, records, metadata)
-    for note in source.clips.notes(str(recording), source.sample_rate_hz):
+    for note in source.stats.notes(str(recording), source.sample_rate_hz):
         print(f"seamodem rx: warning: {note}", file=sys.stderr)
     if any(e is None for e in emissions.values()) and records:
         print("seamodem rx: warning: emission times unknown for some references (no sidecar, no --emit-start): "

@@ -105,9 +105,10 @@ def open_mat(path: Path, variable: str | None = None) -> MatFile:
 
 
 def _is_v73(path: Path) -> bool:
+    """A MATLAB v7.3 file: HDF5, its signature at the start or after a user block of 512, 1024 or 2048 bytes."""
     with open(path, "rb") as f:
-        head = f.read(128)
-    return head.startswith(b"MATLAB 7.3") or head[:8] == b"\x89HDF\r\n\x1a\n"
+        head = f.read(2048 + 8)
+    return head.startswith(b"MATLAB 7.3") or any(head[k:k + 8] == b"\x89HDF\r\n\x1a\n" for k in (0, 512, 1024, 2048))
 
 
 def _rate_from(candidates: dict, path: Path) -> float | None:
@@ -161,7 +162,8 @@ def _open_mat5(path: Path, variable: str | None) -> MatFile:
 
     try:
         m = scipy.io.loadmat(str(path))
-    except (ValueError, TypeError, OSError, NotImplementedError, IndexError, KeyError) as exc:
+    except (ValueError, TypeError, OSError, NotImplementedError, IndexError, KeyError,
+            scipy.io.matlab.MatReadError) as exc:
         raise InputFileError(f"{path} is not a readable MATLAB file: {str(exc).splitlines()[0] if str(exc) else exc!r}") from None
     data = {k: v for k, v in m.items() if not k.startswith("__")}
     numeric = {k for k, v in data.items() if isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)}
