@@ -11,7 +11,8 @@ _EXPORTS = exports(
         "files": ("atomic_outputs", "check_writable"),
         "sidecar": ("SIDECAR_FORMAT", "read_sidecar", "sidecar_path", "write_json"),
         "wav": ("SUBTYPES", "RecordingWarning", "read_wav", "wav_info", "write_wav_blocks"),
-        "source": ("BLOCK", "BlockStats", "RecordingSource", "open_recording", "open_stream", "read_recording"),
+        "source": ("BLOCK", "BlockStats", "RecordingSource", "open_recording", "read_recording"),
+        "stream": ("StreamSource", "open_stream"),
         "blocks": ("read_blocks",),
     }
 )

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import InputFileError
 
-__all__ = ["MAT_RATE_NAMES", "MatFile", "is_mat", "open_mat"]
+__all__ = ["MAT_RATE_NAMES", "MatFile", "is_mat", "open_mat", "resolve_rate"]
 
 MAT_RATE_NAMES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "sampleRate", "SampleRate", "srate")
 
@@ -232,3 +232,38 @@ def _open_mat73(path: Path, variable: str | None) -> MatFile:
     return MatFile("mat73", n, n_ch, in_file, level, reader=reader)
 
 
+def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: list[str]) -> float:
+    """The sample rate: the one given (a note when the file's differs), else the file's.
+
+    Parameters
+    ----------
+    path : Path
+        The recording, named in messages.
+    in_file : float or None
+        The file's rate [Hz].
+    given : float or None
+        The caller's (``--sample-rate``) [Hz].
+    notes : list of str
+        A disagreement is appended here too.
+
+    Returns
+    -------
+    float
+        [Hz].
+
+    Raises
+    ------
+    InputFileError
+        A given rate that is not positive; no rate at all.
+    """
+    if given is not None:
+        if not (math.isfinite(given) and given > 0):
+            raise InputFileError(f"sample-rate: must be a positive number of Hz, got {given!r}")
+        if in_file is not None and abs(in_file - given) > 1e-9 * given:
+            notes.append(f"{path}: the file says {in_file:g} Hz, the command line {given:g} Hz; using {given:g} Hz")
+        return float(given)
+    if in_file is None:
+        raise InputFileError(
+            f"{path}: no sample rate in the file (a scalar named {', '.join(MAT_RATE_NAMES[:3])}, ...); give --sample-rate"
+        )
+    return in_file

@@ -21,14 +21,13 @@ Sources
 :func:`open_recording`
     A file: WAV, FLAC, RF64... (anything soundfile reads), or MATLAB ``.mat``
     v5 / v7.3 (:mod:`seamodem.io.matlab`).
-:func:`open_stream`
+:func:`~seamodem.io.stream.open_stream`
     A pipe or stdin: a WAV stream, or raw PCM given its rate, channels and
     sample format. Its length is unknown (``n_samples`` is None) and it is
     read once, front to back.
 
 A sound card will be one more subclass: it implements
-:meth:`RecordingSource._read` (blocks from the device) and sets
-``n_samples=None``.
+:meth:`RecordingSource._read` and sets ``n_samples=None``.
 """
 
 from __future__ import annotations
@@ -39,13 +38,13 @@ import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO
 
 import numpy as np
 
 from .._progress import progress_bar
 from ..errors import InputFileError
-from .wav import SUBTYPES, AudioInfo, RecordingWarning, open_audio, wav_info
+from .matlab import is_mat, open_mat, resolve_rate
+from .wav import AudioInfo, RecordingWarning, open_audio, wav_info
 
 __all__ = [
     "BLOCK",
@@ -53,10 +52,9 @@ __all__ = [
     "RecordingSource",
     "AudioFileSource",
     "ArraySource",
-    "StreamSource",
     "clip_level",
+    "columns",
     "open_recording",
-    "open_stream",
     "read_recording",
 ]
 
@@ -232,11 +230,6 @@ class RecordingSource(abc.ABC):
         """Length [s]; None for a stream."""
         return None if self.n_samples is None else self.n_samples / self.sample_rate_hz
 
-    @property
-    def clips(self) -> BlockStats:
-        """The latest :meth:`blocks`' statistics (the name ``RecordingSource.clips`` had before [deprecated])."""
-        return self.stats
-
     def check_channel(self, channel: int | None) -> list[int]:
         """The channels to read.
 
@@ -379,8 +372,19 @@ class RecordingSource(abc.ABC):
         """
 
 
-def _columns(data: np.ndarray, channels: list[int]) -> np.ndarray:
-    """The columns ``channels`` of a samples × channels array, contiguous (no copy when it is all of them)."""
+def columns(data: np.ndarray, channels: list[int]) -> np.ndarray:
+    """Some columns of a samples × channels array, contiguous.
+
+    Parameters
+    ----------
+    data : numpy.ndarray, shape (n, n_channels)
+    channels : list of int
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, len(channels))
+        ``data`` itself when ``channels`` is all of them, in order; else a copy.
+    """
     if channels == list(range(data.shape[1])):
         return data
     return np.ascontiguousarray(data[:, channels])
@@ -409,7 +413,7 @@ class AudioFileSource(RecordingSource):
         if info is None:
             info = wav_info(path)
             notes = [info.note] if info.note else []
-        fs = _resolve_rate(path, float(info.samplerate), sample_rate_hz, notes)
+        fs = resolve_rate(path, float(info.samplerate), sample_rate_hz, notes)
         super().__init__(path if name is None else name, fs, info.channels, info.frames, kind="audio",
                          clip_level=clip_level(info.subtype), notes=notes, path=path)
         self.info = info
@@ -429,7 +433,7 @@ class AudioFileSource(RecordingSource):
                 if data.shape[0] == 0:
                     return
                 pos += len(data)
-                yield _columns(data, channels)
+                yield columns(data, channels)
 
 
 class ArraySource(RecordingSource):
@@ -475,157 +479,6 @@ class _ChunkSource(RecordingSource):
         return self._reader(channels, start, stop, block)
 
 
-class StreamSource(RecordingSource):
-    """A recording read as it arrives: a pipe, stdin, a socket (read once, front to back).
-
-    Use :func:`open_stream` to make one.
-
-    Parameters
-    ----------
-    sound : soundfile.SoundFile
-        Open for reading.
-    name : str
-        The stream as named in messages.
-    """
-
-    def __init__(self, sound, *, name: str):
-        super().__init__(name, sound.samplerate, sound.channels, None, kind="stream",
-                         clip_level=clip_level(sound.subtype))
-        self._sound, self._pos = sound, 0
-
-    def _read(self, channels, start, stop, block):
-        import soundfile
-
-        if start < self._pos:
-            raise InputFileError(f"recording {self.name} is a stream: it is read once, from sample {self._pos} on")
-        while self._pos < start:  # skip to start
-            if not len(self._chunk(min(block, start - self._pos))):
-                return
-        while stop is None or self._pos < stop:
-            want = block if stop is None else min(block, stop - self._pos)
-            try:
-                data = self._chunk(want)
-            except (soundfile.LibsndfileError, RuntimeError) as exc:
-                raise InputFileError(f"recording {self.name} is corrupt: {exc}") from None
-            if not len(data):
-                return
-            yield _columns(data, channels)
-
-    def _chunk(self, n: int) -> np.ndarray:
-        data = self._sound.read(n, dtype="float64", always_2d=True)
-        self._pos += len(data)
-        return data
-
-    def close(self) -> None:
-        """Close the stream."""
-        self._sound.close()
-
-
-def open_stream(
-    stream: IO[bytes] | int,
-    *,
-    sample_rate_hz: float | None = None,
-    n_channels: int = 1,
-    sample_format: str | None = None,
-    name: str = "stdin",
-) -> StreamSource:
-    """A recording arriving on a pipe, stdin or any binary file object.
-
-    Parameters
-    ----------
-    stream : binary file object or int
-        ``sys.stdin.buffer``, an ``os.pipe()`` end, an open file, a BytesIO;
-        or a file descriptor. A pipe is read through its descriptor (nothing
-        of it must have been read before).
-    sample_rate_hz : float, optional
-        Raw PCM: its rate [Hz]. Without it the stream is a WAV stream (its
-        header gives rate, channels and format; its length is ignored).
-    n_channels : int
-        Raw PCM: interleaved channels.
-    sample_format : str, optional
-        Raw PCM: "pcm16" (default), "pcm24" or "float32" (little-endian).
-    name : str
-        The stream as named in messages.
-
-    Returns
-    -------
-    StreamSource
-
-    Raises
-    ------
-    InputFileError
-        Not a WAV stream; a bad raw format.
-    """
-    import soundfile
-
-    src = stream
-    if not isinstance(stream, int):
-        seekable = getattr(stream, "seekable", lambda: False)()
-        if not seekable and hasattr(stream, "fileno"):
-            src = stream.fileno()  # libsndfile reads a pipe through its descriptor
-    closefd = False
-    try:
-        if sample_rate_hz is None:
-            if sample_format is not None:
-                raise InputFileError(f"{name}: a sample format is given for a raw stream only (give its rate too)")
-            sound = soundfile.SoundFile(src, closefd=closefd) if isinstance(src, int) else soundfile.SoundFile(src)
-        else:
-            fmt = "pcm16" if sample_format is None else sample_format
-            if fmt not in SUBTYPES:
-                raise InputFileError(f"{name}: raw sample format must be one of {', '.join(SUBTYPES)}, got {fmt!r}")
-            if not (math.isfinite(sample_rate_hz) and sample_rate_hz > 0) or int(n_channels) < 1:
-                raise InputFileError(f"{name}: a raw stream needs a positive rate and channels >= 1")
-            kwargs = dict(samplerate=int(round(sample_rate_hz)), channels=int(n_channels), subtype=SUBTYPES[fmt],
-                          format="RAW", endian="LITTLE")
-            sound = soundfile.SoundFile(src, closefd=closefd, **kwargs) if isinstance(src, int) else \
-                soundfile.SoundFile(src, **kwargs)
-    except (soundfile.LibsndfileError, RuntimeError) as exc:
-        raise InputFileError(f"{name} is not a readable audio stream: {exc}") from None
-    out = StreamSource(sound, name=name)
-    if sample_rate_hz is not None:
-        out.sample_rate_hz = float(sample_rate_hz)
-    return out
-
-
-def _resolve_rate(path: Path, in_file: float | None, given: float | None, notes: list[str]) -> float:
-    """The sample rate: the one given (warned when the file's differs), else the file's.
-
-    Parameters
-    ----------
-    path : Path
-        The recording, named in messages.
-    in_file : float or None
-        The file's rate [Hz].
-    given : float or None
-        The caller's (``--sample-rate``) [Hz].
-    notes : list of str
-        A disagreement is appended here too.
-
-    Returns
-    -------
-    float
-        [Hz].
-
-    Raises
-    ------
-    InputFileError
-        A given rate that is not positive; no rate at all.
-    """
-    from .matlab import MAT_RATE_NAMES
-
-    if given is not None:
-        if not (math.isfinite(given) and given > 0):
-            raise InputFileError(f"sample-rate: must be a positive number of Hz, got {given!r}")
-        if in_file is not None and abs(in_file - given) > 1e-9 * given:
-            notes.append(f"{path}: the file says {in_file:g} Hz, the command line {given:g} Hz; using {given:g} Hz")
-        return float(given)
-    if in_file is None:
-        raise InputFileError(
-            f"{path}: no sample rate in the file (a scalar named {', '.join(MAT_RATE_NAMES[:3])}, ...); give --sample-rate"
-        )
-    return in_file
-
-
 def open_recording(
     path: str | Path,
     *,
@@ -666,18 +519,16 @@ def open_recording(
         Missing, empty or unreadable file; missing variable or rate; complex,
         3-D or empty samples.
     """
-    from . import matlab
-
     path = Path(path)
     if info is None:
         if not path.is_file():
             raise InputFileError(f"recording not found: {path}")
         if path.stat().st_size == 0:
             raise InputFileError(f"recording {path} is empty (0 bytes)")
-    if matlab.is_mat(path):
+    if is_mat(path):
         notes: list[str] = []
-        opened = matlab.open_mat(path, mat_variable)
-        fs = _resolve_rate(path, opened.sample_rate_hz, sample_rate_hz, notes)
+        opened = open_mat(path, mat_variable)
+        fs = resolve_rate(path, opened.sample_rate_hz, sample_rate_hz, notes)
         common = dict(name=str(path) if name is None else name, kind=opened.kind, clip_level=opened.clip_level,
                       notes=notes, path=path)
         if opened.samples is not None:
