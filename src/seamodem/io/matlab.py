@@ -42,7 +42,7 @@ MAT_RATE_NAMES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "sampleRate
 class MatFile:
     """The samples of a ``.mat`` file, as found: in memory (v5) or read block by block (v7.3).
 
-    Attributes
+    Parameters
     ----------
     kind : str
         "mat5" or "mat73".

@@ -82,7 +82,7 @@ def clip_level(subtype: str) -> float:
 class BlockStats:
     """What a source saw over the range it counted: clipped samples and silence.
 
-    Attributes
+    Parameters
     ----------
     clipped : int
         Clipped samples, every channel read.
