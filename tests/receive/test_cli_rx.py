@@ -72,6 +72,12 @@ def test_emit_schedule_jsonl_sound_speed_and_clock_offset(beacon, tmp_path):
     assert header["sound_speed_mps"] == 1480.0
     assert np.allclose([r.tof_s for r in recs], DELAY_S - 0.05, atol=1e-6)  # 1.5 mm at c
     assert np.allclose([r.range_m for r in recs], 1480.0 * (DELAY_S - 0.05), atol=1e-3)
+    # the header holds every receiver setting, as ReceiverSettings.to_dict() gives them
+    from seamodem.receive.settings import ReceiverSettings
+
+    settings = ReceiverSettings.from_dict(header)
+    assert settings == ReceiverSettings(sound_speed_mps=1480.0, clock_offset_s=0.05, decode=True)
+    assert {k: header[k] for k in settings.to_dict()} == settings.to_dict()
 
 
 def test_plots_are_written(beacon, tmp_path):

@@ -37,9 +37,9 @@ import numpy as np
 from .._version import __version__
 from ..config import FrameConfig
 from ..errors import ConfigError, SeamodemError
-from ..io.blocks import BlockStats, read_blocks
+from ..io.blocks import read_blocks
 from ..io.files import check_writable
-from ..io.wav import wav_channel
+from ..io.source import BlockStats, open_recording
 from ..receive.detect import DETECTION_CONTEXT_S
 from ..receive.measure import NOISE_GAP_S, NOISE_WINDOW_S, frame_span_s
 from ..receive.records import MeasurementRecord, write_measurements
@@ -192,11 +192,12 @@ def plan_parts(
     failed: list[tuple[int, str]] = []
     for i, rec in enumerate(recordings):
         try:
-            info, ch = wav_channel(rec.path, channel=rec.channel)
+            source = open_recording(rec.path)
+            ch = source.one_channel(rec.channel)
         except SeamodemError as exc:
             failed.append((i, str(exc)))
             continue
-        fs, n = float(info.samplerate), int(info.frames)
+        fs, n = source.sample_rate_hz, source.n_samples
         file = str(Path(rec.path).resolve())
         if segment_s is None or segment_s * fs >= n:
             parts.append(Part(rec, file, i, 0, 1, 0, n, 0, n, fs, n, ch, -math.inf, math.inf))

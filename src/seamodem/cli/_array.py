@@ -2,35 +2,66 @@
 
 from __future__ import annotations
 
-import argparse
 from typing import Any
 
 
-def _array(args: argparse.Namespace):
-    from ..channel.array import load_array
+def load_array(spec: str):
+    """The array ``--array SPEC`` names (as ``seamodem channel --array``).
 
-    return load_array(args.array)
+    Parameters
+    ----------
+    spec : str
+        File or inline specification (docs/array.md).
+
+    Returns
+    -------
+    seamodem.channel.array.ReceiverArray
+    """
+    from ..channel.array import load_array as load
+
+    return load(spec)
 
 
-def array_records(args: argparse.Namespace, inputs) -> list:
-    """Records of every frame of a multichannel recording, with the direction of arrival (receive.array)."""
+def array_records(array, inputs) -> list:
+    """Records of every frame of a multichannel recording, with the direction of arrival (receive.array).
+
+    Parameters
+    ----------
+    array : ReceiverArray
+        From :func:`load_array`.
+    inputs : seamodem.cli.rx._Inputs
+        The recording and what its receiver needs.
+
+    Returns
+    -------
+    list of MeasurementRecord
+    """
     from ..receive.array import receive_array_file
 
-    array = _array(args)
     return receive_array_file(inputs.path, inputs.config, array.element_positions_m, emissions=inputs.emissions,
                               settings=inputs.settings, complex_gains=array.complex_gains,
                               position_sigma_m=array.position_sigma_m, pilot=inputs.pilot,
                               payloads=inputs.payloads, assume=array.assume)
 
 
-def array_header(args: argparse.Namespace) -> dict[str, Any]:
-    """The array as the receiver assumed it, for the measurement sidecar ({} without --array)."""
-    if not getattr(args, "array", None):
-        return {}
+def array_header(array, spec: str) -> dict[str, Any]:
+    """The array as the receiver assumed it, for the measurement sidecar.
+
+    Parameters
+    ----------
+    array : ReceiverArray
+        From :func:`load_array`.
+    spec : str
+        ``--array`` as given.
+
+    Returns
+    -------
+    dict
+        ``{"array": {...}}``.
+    """
     from ..receive.array import array_geometry
 
-    array = _array(args)
     geometry = array_geometry(array.element_positions_m, array.assume)
-    return {"array": {"spec": args.array, **array.to_dict(), "geometry": geometry.kind, "assume": geometry.assume or None,
+    return {"array": {"spec": spec, **array.to_dict(), "geometry": geometry.kind, "assume": geometry.assume or None,
                       "ambiguity": geometry.ambiguity or None,
                       "note": "the receiver uses the nominal element positions and removes gain_db/phase_rad"}}

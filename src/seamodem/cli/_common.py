@@ -15,7 +15,30 @@ from ..config import FrameConfig, get_preset, load_config
 from ..errors import SeamodemError
 from ..io.files import check_writable
 
-__all__ = ["add_config_options", "config_from_args", "command_line", "output_path", "reported_warnings"]
+__all__ = ["DEFAULT_SOUND_SPEED_MPS", "sound_speed", "add_config_options", "config_from_args", "command_line", "emit_schedule",
+           "output_path", "reported_warnings"]
+
+#: c when neither --sound-speed nor a sidecar gives one [m/s]
+DEFAULT_SOUND_SPEED_MPS = 1500.0
+
+
+def sound_speed(args, sidecar: dict | None) -> float:
+    """c for every receiver mode: --sound-speed, else the recording's sidecar, else 1500 m/s with a note.
+
+    Outside 1400–1600 m/s it is refused unless ``--force-sound-speed``
+    (:func:`~seamodem.receive.settings.resolve_sound_speed`).
+    """
+    from ..errors import ConfigError, SeamodemError
+    from ..receive.settings import resolve_sound_speed
+
+    try:
+        value, origin = resolve_sound_speed(args.sound_speed, sidecar, force=args.force_sound_speed)
+    except ConfigError as exc:
+        raise SeamodemError(f"sound-speed: {exc.message}") from None
+    if origin == "default" and not args.quiet:
+        print(f"seamodem rx: note: c = {value:g} m/s (no --sound-speed, and the recording's sidecar gives none)",
+              file=sys.stderr)
+    return value
 
 
 def add_config_options(parser: argparse.ArgumentParser) -> None:
@@ -52,6 +75,32 @@ def config_from_args(args: argparse.Namespace, *, config_file: str | None = None
     if overrides:
         config = FrameConfig.from_dict(overrides, base=config)
     return config
+
+
+def emit_schedule(args: argparse.Namespace):
+    """The emissions ``--emit-start``/``--emit-period`` state, or None when neither is given.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        With ``emit_start`` and ``emit_period`` [s].
+
+    Returns
+    -------
+    Emissions or None
+
+    Raises
+    ------
+    SeamodemError
+        One of the two given without the other.
+    """
+    if args.emit_start is None and args.emit_period is None:
+        return None
+    if args.emit_start is None or args.emit_period is None:
+        raise SeamodemError("emit-start: --emit-start and --emit-period go together")
+    from ..receive.settings import Emissions
+
+    return Emissions(start_s=args.emit_start, period_s=args.emit_period)
 
 
 _ARGV: list[str] | None = None

@@ -35,16 +35,17 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io.blocks import read_blocks
+    from ..io.blocks import channel_blocks
     from ..io.sidecar import read_sidecar, sidecar_path
-    from ..io.wav import wav_channel
+    from ..io.source import open_recording
     from ..plots import plot_recording_blocks
 
     wav = Path(args.recording)
     out = output_path(args.output or wav.with_suffix(".png"), ".png")
     with reported_warnings("plot"):
-        info, ch = wav_channel(wav, channel=args.channel)
-        fs, total_s = info.samplerate, info.duration
+        source = open_recording(wav)
+        ch = source.one_channel(args.channel)
+        fs, total_s, n = source.sample_rate_hz, source.duration_s, source.n_samples
         whole = args.start is None and args.duration is None
         start_s = 0.0 if args.start is None else args.start
         duration_s = DEFAULT_WINDOW_S if args.duration is None else args.duration
@@ -55,9 +56,8 @@ def run(args: argparse.Namespace) -> int:
         config = None
         if sidecar_path(wav).is_file():
             config = FrameConfig.from_dict(read_sidecar(sidecar_path(wav))["config"])
-        i0, i1 = (0, info.frames) if whole else (int(start_s * fs), min(int(math.ceil((start_s + duration_s) * fs)),
-                                                                          info.frames))
-        blocks = read_blocks(wav, channel=ch, start=i0, stop=i1, info=info)
+        i0, i1 = (0, n) if whole else (int(start_s * fs), min(int(math.ceil((start_s + duration_s) * fs)), n))
+        blocks = channel_blocks(source, ch, start=i0, stop=i1)
         span = "whole file" if whole else f"{i0 / fs:g}–{i1 / fs:g} s"
         plot_recording_blocks(blocks, fs, out, n_samples=i1 - i0, t0_s=i0 / fs,
                               window_s=(start_s, start_s + duration_s), config=config, title=wav.name, span=span)

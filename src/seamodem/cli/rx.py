@@ -20,9 +20,15 @@ from typing import NamedTuple
 
 from ..errors import InputFileError, SeamodemError
 from ..io.files import check_writable
-from ._common import add_config_options, command_line, config_from_args, reported_warnings
+from ._common import (
+    add_config_options,
+    command_line,
+    config_from_args,
+    emit_schedule,
+    reported_warnings,
+    sound_speed,
+)
 
-DEFAULT_SOUND_SPEED_MPS = 1500.0
 #: the options that make ``seamodem rx`` a batch decode even for one recording
 BATCH_OPTIONS = ("segment", "overlap", "workers", "scheduler", "resume")
 
@@ -48,7 +54,10 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--output", required=True, metavar="MEAS", help="output .csv or .jsonl")
     p.add_argument("--emit-start", type=float, metavar="T0", help="emission time of frame 0 [s] (PPS beacon)")
     p.add_argument("--emit-period", type=float, metavar="TCOM", help="time between emissions [s]")
-    p.add_argument("--sound-speed", type=float, metavar="M/S", help="c (default: the sidecar's, else 1500 m/s)")
+    p.add_argument("--sound-speed", type=float, metavar="M/S",
+                   help="c (default: the recording's sidecar's, else 1500 m/s; 1400-1600 m/s unless forced)")
+    p.add_argument("--force-sound-speed", action="store_true",
+                   help="accept a --sound-speed (or sidecar value) outside 1400-1600 m/s")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
         "--turnaround",
@@ -128,8 +137,8 @@ def _add_batch_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _sidecar_for(args, recording: str) -> dict | None:
-    """The sidecar named by --config (if it is one), else the recording's own, else None.
+def _sidecar_for(config_option: str | None, recording: str) -> tuple[dict | None, bool]:
+    """The sidecar named by --config (if it is one), else the recording's own, else None; and whether it is the own.
 
     A --config that is a preset or a plain configuration file still takes the
     emission times, pilot and payloads from the recording's own sidecar when
@@ -137,28 +146,28 @@ def _sidecar_for(args, recording: str) -> dict | None:
     """
     from ..io.sidecar import read_sidecar, sidecar_path
 
-    if args.config:
-        path = Path(args.config)
+    if config_option:
+        path = Path(config_option)
         if path.suffix.lower() == ".json" and path.is_file():
             try:
                 data = json.loads(path.read_text(encoding="utf-8"))
             except json.JSONDecodeError:
-                return None  # load_config reports it with the file name
+                return None, False  # load_config reports it with the file name
             if isinstance(data, dict) and "format" in data:
-                return read_sidecar(path)
+                return read_sidecar(path), False
     own = sidecar_path(recording)
-    return read_sidecar(own) if own.is_file() and own != Path(recording) else None
+    return (read_sidecar(own), True) if own.is_file() and own != Path(recording) else (None, False)
 
 
-def _emissions(args, recording: str, sidecar, duration_s: float):
+def _frame_emissions(args, recording: str, sidecar, duration_s: float):
+    """--emit-start/--emit-period, else the sidecar's emission times (checked against the recording)."""
     import numpy as np
 
     from ..receive.settings import Emissions
 
-    if args.emit_start is not None or args.emit_period is not None:
-        if args.emit_start is None or args.emit_period is None:
-            raise SeamodemError("emit-start: --emit-start and --emit-period go together")
-        return Emissions(start_s=args.emit_start, period_s=args.emit_period)
+    given = emit_schedule(args)
+    if given is not None:
+        return given
     if sidecar is None:
         raise SeamodemError(
             "emission times unknown: give --config SIDECAR.json, put the sidecar beside the recording, "
@@ -178,49 +187,20 @@ def _emissions(args, recording: str, sidecar, duration_s: float):
     return Emissions(times_s=times)
 
 
-class _Inputs(NamedTuple):
-    """What the receiver of one recording needs, from the options and the sidecar."""
-
-    path: str
-    info: object
-    config: object
-    emissions: object
-    settings: object
-    pilot: object
-    payloads: list | None
-
-
-def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
-    """Header, configuration, emissions, receiver settings, pilot and payloads of one recording."""
-    from ..io.sidecar import sidecar_path, sidecar_payloads, sidecar_pilot_bits
-    from ..io.wav import wav_channel
+def _settings(args, sidecar: dict | None):
+    """The options (and the sidecar's channel section) as the receiver's settings: built here, once."""
     from ..receive.settings import ReceiverSettings
 
-    info, _ = wav_channel(recording, channel=0 if args.array else args.channel)
-    sidecar = _sidecar_for(args, recording)
-    own_sidecar = sidecar is not None and not args.config
-    config = config_from_args(args, config_file=str(sidecar_path(recording)) if own_sidecar else None)
-    emissions = _emissions(args, recording, sidecar, info.frames / info.samplerate)
-    pilot = None
-    bits = sidecar_pilot_bits(sidecar) if sidecar is not None else None
-    if bits is not None and bits.size == config.n_pilot:
-        pilot = (1.0 - 2.0 * bits).astype(complex)
+    channel = (sidecar or {}).get("channel") or {}
     turnaround = args.turnaround
-    two_way = ((sidecar or {}).get("channel") or {}).get("two_way")
+    two_way = channel.get("two_way")
     if two_way and turnaround is None and args.emit_start is None:
         # a two-way exchange (seamodem channel with [two_way]): its frames' t_emit_s are the polls
         turnaround = float(two_way["turnaround_s"])
         if not args.quiet:
             print(f"two-way recording: turnaround {turnaround:g} s from its sidecar")
-    # an older or hand-made sidecar without payloads: decode without counting bit errors
-    payloads = sidecar_payloads(sidecar) if sidecar is not None and args.decode else None
-    sound_speed = args.sound_speed
-    if sound_speed is None:
-        sound_speed = float((sidecar or {}).get("channel", {}).get("sound_speed_mps", DEFAULT_SOUND_SPEED_MPS))
-    if not (math.isfinite(sound_speed) and sound_speed > 0):
-        raise SeamodemError(f"sound-speed: must be a positive number of m/s, got {sound_speed!r}")
-    settings = ReceiverSettings(
-        sound_speed_mps=sound_speed,
+    return ReceiverSettings(
+        sound_speed_mps=sound_speed(args, sidecar),
         clock_offset_s=args.clock_offset,
         turnaround_s=turnaround,
         v_max_mps=args.v_max,
@@ -229,46 +209,62 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
         turbo_passes=args.turbo_passes,
         blank_impulses=args.blank_impulses,
     )
-    return _Inputs(recording, info, config, emissions, settings, pilot, payloads)
 
 
-def _header(args, inputs: list[_Inputs], *, batch: bool) -> dict:
-    """The measurement file's header: the command, and what the receiver was told."""
-    described = [
-        {
-            "sample_rate_hz": i.info.samplerate,
-            "sound_speed_mps": i.settings.sound_speed_mps,
-            "turnaround_s": i.settings.turnaround_s,
-            "config": i.config.to_dict(),
-        }
-        for i in inputs
-    ]
-    if not batch:
-        (one,) = described
-        return {
-            "created_by": command_line(),
-            "recording": str(inputs[0].path),
-            "sample_rate_hz": one["sample_rate_hz"],
-            "sound_speed_mps": one["sound_speed_mps"],
-            "clock_offset_s": args.clock_offset,
-            "turnaround_s": one["turnaround_s"],
-            "decode": args.decode,
-            "turbo_passes": args.turbo_passes,
-            "config": one["config"],
-        }
-    header = {
-        "created_by": command_line(),
-        "clock_offset_s": args.clock_offset,
-        "decode": args.decode,
-        "turbo_passes": args.turbo_passes,
-        "segment_s": args.segment,
+class _Inputs(NamedTuple):
+    """What the receiver of one recording needs: the open recording, and what the options and its sidecar say."""
+
+    path: str
+    source: object
+    config: object
+    emissions: object
+    settings: object
+    pilot: object
+    payloads: list | None
+
+
+def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
+    """The recording (opened once), its configuration, emissions, receiver settings, pilot and payloads."""
+    from ..io.sidecar import sidecar_path, sidecar_payloads, sidecar_pilot_bits
+    from ..io.source import open_recording
+
+    source = open_recording(recording)
+    source.one_channel(0 if args.array else args.channel)
+    sidecar, own = _sidecar_for(args.config, recording)
+    config = config_from_args(args, config_file=str(sidecar_path(recording)) if own else None)
+    emissions = _frame_emissions(args, recording, sidecar, source.duration_s)
+    pilot = None
+    bits = sidecar_pilot_bits(sidecar) if sidecar is not None else None
+    if bits is not None and bits.size == config.n_pilot:
+        pilot = (1.0 - 2.0 * bits).astype(complex)
+    settings = _settings(args, sidecar)
+    # an older or hand-made sidecar without payloads: decode without counting bit errors
+    payloads = sidecar_payloads(sidecar) if sidecar is not None and settings.decode else None
+    return _Inputs(recording, source, config, emissions, settings, pilot, payloads)
+
+
+def _described(inputs: _Inputs) -> dict:
+    """What the receiver of one recording was told: its rate, every setting, the frame configuration."""
+    fs = inputs.source.sample_rate_hz
+    return {
+        "sample_rate_hz": int(fs) if float(fs).is_integer() else fs,  # an audio file's rate is an integer
+        **inputs.settings.to_dict(),
+        "config": inputs.config.to_dict(),
     }
+
+
+def _header(inputs: list[_Inputs], *, segment_s: float | None = None, batch: bool = False) -> dict:
+    """The measurement file's header: the command, and what the receiver was told (shared by all, for a batch)."""
+    described = [_described(i) for i in inputs]
+    if not batch:
+        return {"created_by": command_line(), "recording": str(inputs[0].path), **described[0]}
+    header = {"created_by": command_line()}
     # what every recording shares goes in the header, as for a single recording
-    for key in ("sample_rate_hz", "sound_speed_mps", "turnaround_s", "config"):
+    for key in described[0] if described else ():
         values = [d[key] for d in described]
-        if values and all(v == values[0] for v in values):
+        if all(v == values[0] for v in values):
             header[key] = values[0]
-    return header
+    return header | {"segment_s": segment_s}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -296,27 +292,22 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
 
         from ..receive.recording import receive_file
         from ..receive.records import write_measurements
+        from ._array import array_header, array_records, load_array
 
+        header = _header([inputs])
         if args.plot:
             Path(args.plot).mkdir(parents=True, exist_ok=True)
-        on_frame = _plotter(args, inputs) if args.plot else None
-        records = receive_file(
-            inputs.path,
-            inputs.config,
-            emissions=inputs.emissions,
-            settings=inputs.settings,
-            channel=args.channel,
-            pilot=inputs.pilot,
-            payloads=inputs.payloads,
-            on_frame=on_frame,
-            progress=False if args.quiet else None,
-        )
-        from ._array import array_header, array_records
-
-        if args.array:  # the generator above is never started
-            records = array_records(args, inputs)
+        if args.array:
+            array = load_array(args.array)
+            records = array_records(array, inputs)
+            header |= array_header(array, args.array)
+        else:
+            on_frame = _plotter(Path(args.plot), args.plot_frames, inputs) if args.plot else None
+            records = receive_file(inputs.source, inputs.config, emissions=inputs.emissions, settings=inputs.settings,
+                                   channel=args.channel, pilot=inputs.pilot, payloads=inputs.payloads,
+                                   on_frame=on_frame, progress=False if args.quiet else None)
         counted = _Counted(records)
-        n = write_measurements(out, counted, _header(args, [inputs], batch=False) | array_header(args))
+        n = write_measurements(out, counted, header)
         _warn_unmatched(counted.unmatched)
     if not args.quiet:
         print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {inputs.settings.sound_speed_mps:g} m/s)"
@@ -365,7 +356,7 @@ def _run_many(args: argparse.Namespace, out: Path) -> int:
         segment_s=args.segment,
         overlap_s=args.overlap,
         output=out,
-        header=_header(args, inputs, batch=True),
+        header=_header(inputs, segment_s=args.segment, batch=True),
         resume=args.resume,
         backend="dask" if args.scheduler else "processes",
         workers=args.workers,
@@ -424,8 +415,8 @@ class _Counted:
             yield rec
 
 
-def _plotter(args, inputs: _Inputs):
-    """on_frame callback that saves a figure of each of the first --plot-frames frames."""
+def _plotter(folder: Path, n_frames: int, inputs: _Inputs):
+    """on_frame callback that saves a figure of each of the first ``n_frames`` frames in ``folder``."""
     from ..receive.plots import plot_frame
     from ..transmit.pilot import pilot_symbols
 
@@ -434,10 +425,10 @@ def _plotter(args, inputs: _Inputs):
     count = [0]
 
     def on_frame(m, bb, t0_s, fs):
-        if count[0] >= args.plot_frames:
+        if count[0] >= n_frames:
             return
         count[0] += 1
-        path = Path(args.plot) / f"frame_{count[0] - 1:04d}_{m.pilot.t_start_s:.3f}s.png"
+        path = folder / f"frame_{count[0] - 1:04d}_{m.pilot.t_start_s:.3f}s.png"
         plot_frame(
             path, m, bb, fs=fs, t0_s=t0_s, config=config, pilot=symbols, sound_speed_mps=sound_speed
         )

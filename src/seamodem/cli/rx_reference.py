@@ -15,11 +15,9 @@ from pathlib import Path
 
 from ..errors import ConfigError, InputFileError, SeamodemError
 from ..io.files import check_writable
-from ._common import command_line
+from ._common import command_line, emit_schedule, sound_speed
 
 __all__ = ["add_reference_options", "run_reference", "write_reference_records"]
-
-DEFAULT_SOUND_SPEED_MPS = 1500.0
 
 
 def add_reference_options(p: argparse.ArgumentParser) -> None:
@@ -65,21 +63,48 @@ def add_reference_options(p: argparse.ArgumentParser) -> None:
     p.set_defaults(run=run)
 
 
-def _emissions(args, sidecar: dict | None, references) -> dict:
+def _reference_emissions(args, sidecar: dict | None, references) -> dict:
     """Emissions per reference name (None when unknown)."""
     from ..receive.settings import Emissions
 
-    if args.emit_start is not None or args.emit_period is not None:
-        if args.emit_start is None or args.emit_period is None:
-            raise SeamodemError("emit-start: --emit-start and --emit-period go together")
-        e = Emissions(start_s=args.emit_start, period_s=args.emit_period)
-        return {r.name: e for r in references}
+    given = emit_schedule(args)
+    if given is not None:
+        return {r.name: given for r in references}
     out = {}
     for r in references:
+        # a packet's emission is its first chirp's: the later chirps of its trains and its postamble are
+        # placed from it (ReferenceWaveform.packet)
         times = [float(f["t_emit_s"]) for f in (sidecar or {}).get("frames", [])
-                 if f.get("reference") == r.name and f.get("role", "ping") != "postamble"]
+                 if f.get("reference") == r.name and f.get("role", "ping") != "postamble"
+                 and f.get("train_position", 0) == 0]
         out[r.name] = Emissions(times_s=times) if times else None
     return out
+
+
+def _with_template_options(ref, args):
+    """--sample-rate and --mat-variable reach a template reference that does not set its own."""
+    import dataclasses
+
+    if ref.kind != "template":
+        return ref
+    changes = {}
+    if args.sample_rate is not None and not ref.sample_rate_hz:
+        changes["sample_rate_hz"] = args.sample_rate
+    if args.mat_variable and not ref.mat_variable:
+        changes["mat_variable"] = args.mat_variable
+    return dataclasses.replace(ref, **changes) if changes else ref
+
+
+def _recording_sidecar(recording: Path) -> dict | None:
+    """The recording's sidecar (``REC.json``, any seamodem format), for its sound speed; None when absent."""
+    path = recording.with_suffix(".json")
+    if path == recording or not path.is_file():
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError, OSError):
+        return None
+    return data if isinstance(data, dict) else None
 
 
 def _own_sidecar(recording: Path) -> dict | None:
@@ -121,9 +146,10 @@ def run_reference(args: argparse.Namespace) -> int:
             raise SeamodemError(f"{name}: not available with --reference")
     from ..receive.settings import ReferenceSettings
 
+    recording = Path(args.recording[0])
     try:
         settings = ReferenceSettings(
-            sound_speed_mps=DEFAULT_SOUND_SPEED_MPS if args.sound_speed is None else args.sound_speed,
+            sound_speed_mps=sound_speed(args, _recording_sidecar(recording)),
             clock_offset_s=args.clock_offset, turnaround_s=args.turnaround, v_max_mps=args.v_max,
             false_alarms_per_hour=args.false_alarms_per_hour,
             **({} if args.max_accel is None else {"max_accel_mps2": args.max_accel}),
@@ -132,9 +158,9 @@ def run_reference(args: argparse.Namespace) -> int:
         raise SeamodemError(f"{exc.parameter.replace('_', '-')}:{str(exc).partition(':')[2]}") from None
     if args.all_channels and args.channel is not None:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
-    recording = Path(args.recording[0])
 
-    from ..io.mat import RecordingWarning, open_recording
+    from ..io.source import open_recording
+    from ..io.wav import RecordingWarning
     from ..transmit.reference import load_references
 
     with warnings.catch_warnings(record=True) as caught:
@@ -145,10 +171,10 @@ def run_reference(args: argparse.Namespace) -> int:
     if source.n_channels > 1 and args.channel is None and not args.all_channels:
         raise InputFileError(f"recording {recording} has {source.n_channels} channels: choose one with --channel, or --all-channels")
     channels = source.check_channel(None if args.all_channels else (args.channel or 0))
-    references = [r for spec in args.reference for r in load_references(spec)]
+    references = [_with_template_options(r, args) for spec in args.reference for r in load_references(spec)]
     sidecar = _own_sidecar(recording)
-    sound_speed = settings.sound_speed_mps
-    emissions = _emissions(args, sidecar, references)
+    c = settings.sound_speed_mps
+    emissions = _reference_emissions(args, sidecar, references)
 
     from ..receive.reference import (
         ReferenceReceiver,
@@ -171,13 +197,19 @@ def run_reference(args: argparse.Namespace) -> int:
     for f in found:
         f.channel = channels[f.channel]
         lo = int(f.fit.t_arrival_s * source.sample_rate_hz)
-        f.clipped = source.clips.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
+        f.clipped = source.stats.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
     found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
     found = keep_matching_reference(found)
     max_accel = settings.max_accel_mps2
-    pair_up(found, eps_max=settings.eps_max, sound_speed_mps=sound_speed, max_accel_mps2=max_accel)
+    from ..receive.reference.packets import PacketWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PacketWarning)
+        pair_up(found, eps_max=settings.eps_max, sound_speed_mps=c, max_accel_mps2=max_accel)
+    for w in caught:
+        print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
     records = [
-        to_record(f, emissions[f.reference.name], sound_speed_mps=sound_speed, clock_offset_s=settings.clock_offset_s)
+        to_record(f, emissions[f.reference.name], sound_speed_mps=c, clock_offset_s=settings.clock_offset_s)
         for f in found
     ]
     metadata = {
@@ -185,7 +217,7 @@ def run_reference(args: argparse.Namespace) -> int:
         "recording": str(recording),
         "sample_rate_hz": source.sample_rate_hz,
         "channels": channels,
-        "sound_speed_mps": sound_speed,
+        "sound_speed_mps": c,
         "clock_offset_s": settings.clock_offset_s,
         "v_max_mps": settings.v_max_mps,
         "false_alarms_per_hour": settings.false_alarms_per_hour,
@@ -196,7 +228,7 @@ def run_reference(args: argparse.Namespace) -> int:
         "snr_definition": "in-band SNR over the reference's band [f_low, f_high] during the ping; E/N0 = SNR·B·T",
     }
     n = write_reference_records(out, records, metadata)
-    for note in source.clips.notes(str(recording), source.sample_rate_hz):
+    for note in source.stats.notes(str(recording), source.sample_rate_hz):
         print(f"seamodem rx: warning: {note}", file=sys.stderr)
     if any(e is None for e in emissions.values()) and records:
         print("seamodem rx: warning: emission times unknown for some references (no sidecar, no --emit-start): "
@@ -206,5 +238,5 @@ def run_reference(args: argparse.Namespace) -> int:
     if not args.quiet:
         per = {r.name: sum(rec.reference == r.name for rec in records) for r in receiver.references}
         listed = ", ".join(f"{k}: {v}" for k, v in per.items())
-        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; c = {sound_speed:g} m/s)")
+        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; c = {c:g} m/s)")
     return 0

@@ -1,4 +1,4 @@
-"""File input and output: WAV recordings, JSON sidecars, the checked block reader, atomic writes.
+"""File input and output: recordings (files and streams, one source interface), JSON sidecars, atomic writes.
 
 Names are imported on first use, so that ``seamodem.io.files`` alone does not
 bring in numpy or soundfile.
@@ -10,8 +10,10 @@ _EXPORTS = exports(
     {
         "files": ("atomic_outputs", "check_writable"),
         "sidecar": ("SIDECAR_FORMAT", "read_sidecar", "sidecar_path", "write_json"),
-        "wav": ("SUBTYPES", "read_wav", "wav_info", "write_wav_blocks"),
-        "blocks": ("BlockStats", "read_blocks"),
+        "wav": ("SUBTYPES", "RecordingWarning", "read_wav", "wav_info", "write_wav_blocks"),
+        "source": ("BLOCK", "BlockStats", "RecordingSource", "open_recording", "read_recording"),
+        "stream": ("StreamSource", "open_stream"),
+        "blocks": ("read_blocks",),
     }
 )
 __all__ = list(_EXPORTS)

@@ -1,46 +1,40 @@
-"""One block reader for recordings: samples of one channel, checked as they are read.
+"""One channel of a recording in checked blocks: :func:`read_blocks`, a thin wrapper over the source.
 
-The receiver (:func:`~seamodem.receive.recording.receive_file`) and batch
-decoding (:func:`~seamodem.batch.decode.decode_part`) both read through
-:func:`read_blocks`, so a whole file and its segments see the same blocks and
-the same checks: NaN or infinite samples and a read that stops short are
-errors; clipped and silent samples are counted in :class:`BlockStats`. A WAV
-whose header lies about its length is read as far as its samples go
-(:func:`~seamodem.io.wav.wav_info`, which reports it).
+Every reader goes through :class:`~seamodem.io.source.RecordingSource`; this
+module keeps the one-channel form (1-D blocks) and the names it has had.
 """
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import soundfile
 
-from .._progress import progress_bar
-from ..errors import InputFileError
-from .wav import AudioInfo, RecordingWarning, open_audio, wav_info
+from .source import BLOCK, BlockStats, RecordingSource, clip_level, open_recording
+from .wav import AudioInfo
 
-__all__ = ["BLOCK", "BlockStats", "clip_level", "read_blocks"]
-
-#: samples read per block
-BLOCK = 1 << 20
+__all__ = ["BLOCK", "BlockStats", "clip_level", "read_blocks", "channel_blocks"]
 
 
-def clip_level(subtype: str) -> float:
-    """|sample| at or above which a sample counts as clipped: full scale less half an LSB of PCM-16 for PCM files."""
-    return 1.0 - 2.0**-15 if subtype.startswith("PCM") else 1.0
+def channel_blocks(source: RecordingSource, channel: int, **kwargs) -> Iterator[np.ndarray]:
+    """One channel of a source as 1-D contiguous blocks.
 
+    Parameters
+    ----------
+    source : RecordingSource
+    channel : int
+        Channel, numbered from 0.
+    **kwargs
+        As :meth:`RecordingSource.blocks` (``start``, ``stop``, ``counted``, ``stats``, ``block``, ``progress``).
 
-@dataclass
-class BlockStats:
-    """What :func:`read_blocks` saw over its counted range: clipped samples, and whether all were zero."""
-
-    clipped: int = 0
-    silent: bool = True
-    read: int = 0
+    Yields
+    ------
+    numpy.ndarray, shape (n,)
+        float64.
+    """
+    for data in source.blocks([channel], **kwargs):
+        yield data[:, 0]
 
 
 def read_blocks(
@@ -61,60 +55,42 @@ def read_blocks(
     Parameters
     ----------
     path : str or Path
-        Audio file.
+        Recording (:func:`~seamodem.io.source.open_recording`).
     channel : int
         0-based channel.
     start, stop : int
-        Sample range; ``stop`` is at most the samples present (``AudioInfo.frames``).
+        Sample range [samples]; ``stop`` is at most the samples present.
     counted : (int, int), optional
         Sample range over which clipping and silence are counted in ``stats``
-        (default [start, stop); a segment counts only its own samples so that
-        a file's totals add up).
+        (default [start, stop)).
     stats : BlockStats, optional
         Filled as blocks are read.
     name : str or Path, optional
         The recording as named in error messages (default ``path``).
+    block : int
+        Samples per block.
     progress : bool, optional
         Progress bar (None: on a terminal).
     info : AudioInfo, optional
         The file's :func:`~seamodem.io.wav.wav_info`, when the caller has it
         (and has reported its note); else read here, silently.
 
+    Yields
+    ------
+    numpy.ndarray, shape (n,)
+        float64.
+
     Raises
     ------
     InputFileError
         Truncated or corrupt file, NaN or infinite samples.
     """
-    name = path if name is None else name
-    lo, hi = (start, stop) if counted is None else counted
-    stats = BlockStats() if stats is None else stats
-    if info is None:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RecordingWarning)  # the caller's wav_channel has reported it
-            info = wav_info(path)
-    with open_audio(path, info) as f, progress_bar(
-        total=stop - start, desc="rx", unit="sample", unit_scale=True, enabled=progress
-    ) as bar:
-        level = clip_level(f.subtype)
-        if start:
-            f.seek(start)
-        pos = start
-        while pos < stop:
-            try:
-                data = f.read(min(block, stop - pos), dtype="float64", always_2d=True)
-            except (soundfile.LibsndfileError, RuntimeError) as exc:
-                raise InputFileError(f"recording {name} is truncated or corrupt: {exc}") from None
-            if data.shape[0] == 0:
-                raise InputFileError(f"recording {name} is truncated: it ends at sample {pos}, before {stop}")
-            x = np.ascontiguousarray(data[:, channel])
-            bad = np.flatnonzero(~np.isfinite(x))
-            if bad.size:
-                raise InputFileError(f"recording {name} contains NaN or infinite samples (first at sample {pos + bad[0]})")
-            a, b = max(pos, lo) - pos, min(pos + len(x), hi) - pos
-            if b > a:
-                stats.clipped += int(np.count_nonzero(np.abs(x[a:b]) >= level))
-                stats.silent = stats.silent and not np.any(x[a:b])
-            pos += len(x)
-            stats.read = pos - start
-            bar.update(len(x))
-            yield x
+    import warnings
+
+    from .wav import RecordingWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RecordingWarning)  # the caller has reported the file's notes
+        source = open_recording(path, info=info, name=None if name is None else str(name))
+    yield from channel_blocks(source, channel, start=start, stop=stop, counted=counted, stats=stats, block=block,
+                              progress=progress)

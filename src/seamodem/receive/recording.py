@@ -1,4 +1,4 @@
-"""The file entry point: every frame of an audio file, through the streaming receiver."""
+"""The recording entry point: every frame of a recording (a file or a stream), through the streaming receiver."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..config import FrameConfig
-from ..io.blocks import BlockStats, read_blocks
-from ..io.wav import wav_channel
+from ..io.blocks import channel_blocks
+from ..io.source import BlockStats, RecordingSource, open_recording
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .stream import Receiver, ReceiverWarning
@@ -17,7 +17,21 @@ __all__ = ["receive_file", "recording_warnings"]
 
 
 def recording_warnings(path: str | Path, stats: BlockStats, *, n_frames: int | None) -> list[str]:
-    """One-line notes on a whole recording: silent, clipped, no frame found (``n_frames=0``)."""
+    """One-line notes on a whole recording: silent, clipped, no frame found.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording as named in the notes.
+    stats : BlockStats
+        What its blocks held.
+    n_frames : int or None
+        Frames found (0: a note says none was); None: not known (part of a recording).
+
+    Returns
+    -------
+    list of str
+    """
     notes = []
     if stats.silent:
         notes.append(f"recording {path} is silent (all samples are zero)")
@@ -29,7 +43,7 @@ def recording_warnings(path: str | Path, stats: BlockStats, *, n_frames: int | N
 
 
 def receive_file(
-    path: str | Path,
+    path: str | Path | RecordingSource,
     config: FrameConfig,
     *,
     emissions: Emissions,
@@ -44,8 +58,10 @@ def receive_file(
 
     Parameters
     ----------
-    path : str or Path
-        WAV (or any format soundfile reads); any sample rate that holds the band.
+    path : str, Path or RecordingSource
+        A recording file (:func:`~seamodem.io.source.open_recording`: WAV or
+        any format soundfile reads, ``.mat``), or an open source (a file
+        already opened, a stream); any sample rate that holds the band.
     config : FrameConfig
     emissions : Emissions
     settings : ReceiverSettings, optional
@@ -71,14 +87,14 @@ def receive_file(
     ReceiverWarning
         Silent or clipped recording; no frame found.
     """
-    path = Path(path)
-    info, ch = wav_channel(path, channel=channel)
+    source = path if isinstance(path, RecordingSource) else open_recording(path)
+    ch = source.one_channel(channel)
     rx = Receiver(config, emissions=emissions, settings=settings, pilot=pilot, payloads=payloads, on_frame=on_frame)
     stats = BlockStats()
-    blocks = read_blocks(path, channel=ch, stop=info.frames, stats=stats, progress=progress, info=info)
+    blocks = channel_blocks(source, ch, stats=stats, progress=progress)
     n = 0
-    for rec in rx.run(blocks, fs=info.samplerate):
+    for rec in rx.run(blocks, fs=source.sample_rate_hz):
         n += 1
         yield rec
-    for note in recording_warnings(path, stats, n_frames=n):
+    for note in recording_warnings(source.name, stats, n_frames=n):
         warnings.warn(note, ReceiverWarning, stacklevel=2)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
@@ -116,8 +117,47 @@ class ReceiverSettings:
         return self.turnaround_s is not None
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain values (for headers and the identity of batch parts)."""
+        """Every field as plain values (for headers and the identity of batch parts).
+
+        Returns
+        -------
+        dict
+            Field name → value, in the order of the fields; ``equalizer`` is
+            None or the fields of its :class:`~seamodem.decode.equalizer.DfeSettings`.
+        """
         return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> ReceiverSettings:
+        """The settings a :meth:`to_dict` (or a measurement header holding one) describes.
+
+        Parameters
+        ----------
+        data : mapping
+            Field name → value; fields missing take their defaults, other keys
+            (a header's ``config``, ``created_by``...) are left aside.
+
+        Returns
+        -------
+        ReceiverSettings
+
+        Raises
+        ------
+        ConfigError
+            A value out of range.
+
+        Examples
+        --------
+        >>> s = ReceiverSettings(sound_speed_mps=1480.0, turnaround_s=0.5)
+        >>> ReceiverSettings.from_dict(s.to_dict()) == s
+        True
+        """
+        values = {f.name: data[f.name] for f in fields(cls) if f.name in data}
+        if isinstance(values.get("equalizer"), Mapping):
+            from ..decode.equalizer import DfeSettings
+
+            values["equalizer"] = DfeSettings(**values["equalizer"])
+        return cls(**values)
 
 
 @dataclass(frozen=True, kw_only=True)

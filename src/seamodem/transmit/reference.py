@@ -462,7 +462,7 @@ def _template_table(ref: ReferenceWaveform, base_dir: Path | None) -> tuple[np.n
     """Envelope table of a template excerpt, and the reference with its band filled in when not stated."""
     import scipy.signal
 
-    from ..io.mat import read_recording
+    from ..io.source import read_recording
 
     path = Path(ref.file)
     if not path.is_absolute() and base_dir is not None:
