@@ -261,3 +261,41 @@ def test_damage_does_what_it_says():
     assert damage(b"a = 1\nb = 2\n", [("token", 0.0, b'"x"')]) == b'a = "x"\nb = 2\n'
     assert damage(b"\x00" * 8, [("u32", 2, 7)]) == b"\x00\x00\x07\x00\x00\x00\x00\x00"
     assert json.loads(damage(b'{"a": 1, "b": 2}', [("token", 0.99, b"[]")])) == {"a": 1, "b": []}
+
+
+@pytest.mark.parametrize("name", ["wav_float", "mat_v73", "scenario_toml"])
+def test_the_command_line_exits_2_in_one_line_and_writes_nothing(name, tmp_path_factory, capsys):
+    """The same damage through ``seamodem rx`` / ``seamodem channel``: exit 0 or 2, never a traceback; on exit
+    2 one error line naming the file and no output left behind."""
+    from seamodem.cli import main
+
+    tmp = tmp_path_factory.mktemp("cli_" + name)
+    fname, make, _ = READERS[name]
+    original = tmp / ("orig_" + fname)
+    make(original)
+    beacon = tmp / "beacon.wav"
+    if name == "scenario_toml":
+        make_sidecar(tmp / "beacon.json")  # writes beacon.wav and its sidecar
+
+    @settings(max_examples=max(10, EXAMPLES // 6), deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+    @given(st.lists(op, min_size=1, max_size=2))
+    def prop(ops):
+        target = tmp / fname
+        target.write_bytes(damage(original.read_bytes(), ops))
+        out = tmp / ("out.wav" if name == "scenario_toml" else "m.csv")
+        for f in (out, out.with_name(out.name + ".json"), out.with_suffix(".json")):
+            f.unlink(missing_ok=True)
+        argv = (["channel", str(beacon), "--scenario", str(target), "-o", str(out), "-q"] if name == "scenario_toml"
+                else ["rx", str(target), "--channel", "0", "--emit-start", "0", "--emit-period", "1",
+                      "-o", str(out), "-q"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            code = main(argv)
+        err = [line for line in capsys.readouterr().err.strip().splitlines() if " error: " in line]
+        assert code in (0, 2)
+        if code == 2:  # (warnings before it allowed: a WAV whose header lies is read, with one)
+            assert len(err) == 1 and target.name in err[0], err
+            assert not out.exists()
+
+    prop()

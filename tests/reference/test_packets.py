@@ -115,3 +115,99 @@ def test_the_two_ping_reproduction_pairs():
     assert [r.frame_index for r in recs] == [0, 1, 0, 1]
     assert all(math.isfinite(r.v_r_pair_mps) for r in recs)
     np.testing.assert_allclose([r.t_arrival_s for r in recs], arrivals, atol=5e-6)
+
+
+# --- the command line: issue 25's reproductions ------------------------------------------------------------------
+
+def _cli(*argv):
+    from seamodem.cli import main
+
+    return main([str(a) for a in argv])
+
+
+def test_reference_ranging_takes_the_recordings_sound_speed(tmp_path, capsys):
+    """tx --reference → channel at c = 1496.99 m/s → rx --reference: the sidecar's c is used (it used 1500:
+    +15 cm of range bias, 0 of 20 within 3σ); outside 1400–1600 m/s is refused in one line unless forced."""
+    from pathlib import Path
+
+    import pandas as pd
+
+    scenario = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "doppler_profile.toml"
+    (tmp_path / "c.toml").write_text(scenario.read_text().replace("sound_speed_mps = 1500.0", "sound_speed_mps = 1496.99"))
+    assert _cli("tx", "--reference", "lfm:18000-30000:0.08", "--count", 6, "--period", 3, "--start", 0.2,
+                "-o", tmp_path / "c.wav", "-q") == 0
+    assert _cli("channel", tmp_path / "c.wav", "--scenario", tmp_path / "c.toml", "-o", tmp_path / "c_rx.wav", "-q") == 0
+    assert _cli("rx", tmp_path / "c_rx.wav", "--reference", tmp_path / "c_rx.json", "-o", tmp_path / "c.csv") == 0
+    assert "c = 1496.99 m/s from the sidecar" in capsys.readouterr().out
+    table = pd.read_csv(tmp_path / "c.csv")
+    import json
+
+    truth = {t["frame_index"]: t for t in json.loads((tmp_path / "c_rx.json").read_text())["truth"]}
+    err = table["range_m"] - [truth[k]["range_true_m"] for k in table["frame_index"]]
+    assert (abs(err) < 3 * table["sigma_range_m"]).all() and abs(err.mean()) < 0.01
+    capsys.readouterr()
+    assert _cli("rx", tmp_path / "c_rx.wav", "--reference", tmp_path / "c_rx.json", "--sound-speed", 1300,
+                "-o", tmp_path / "x.csv") == 2
+    err_lines = capsys.readouterr().err.strip().splitlines()
+    assert len(err_lines) == 1 and "1400" in err_lines[0] and not (tmp_path / "x.csv").exists()
+    assert _cli("rx", tmp_path / "c_rx.wav", "--reference", tmp_path / "c_rx.json", "--sound-speed", 1300,
+                "--force-sound-speed", "-o", tmp_path / "x.csv", "-q") == 0
+
+
+def test_the_two_ping_command_line_reproduction_pairs(tmp_path):
+    """`seamodem tx --reference pa.toml --count 2 --period 1` with postamble_s = 8: two pairs (was 4 lone pings)."""
+    import pandas as pd
+
+    (tmp_path / "pa.toml").write_text('[[reference]]\nkind = "lfm"\nf_low_hz = 19000.0\nf_high_hz = 29000.0\n'
+                                      'duration_s = 0.05\npostamble_s = 8.0\n')
+    assert _cli("tx", "--reference", tmp_path / "pa.toml", "--count", 2, "--period", 1, "--start", 0.3,
+                "--sample-rate", 96000, "-o", tmp_path / "two.wav", "-q") == 0
+    assert _cli("rx", tmp_path / "two.wav", "--reference", tmp_path / "two.json", "-o", tmp_path / "two.csv", "-q") == 0
+    table = pd.read_csv(tmp_path / "two.csv").sort_values("t_arrival_s")
+    assert list(table["role"]) == ["preamble", "preamble", "postamble", "postamble"]
+    assert list(table["frame_index"]) == [0, 1, 0, 1] and table["v_r_pair_mps"].notna().all()
+    assert set(table["v_r_source"]) == {"packet"}
+
+
+def test_a_train_packet_from_tx_to_rx(tmp_path):
+    """The packet TOML (4 + 3 chirps) through tx and rx: each packet's 7 rows, their frame index and emission."""
+    import pandas as pd
+
+    (tmp_path / "p.toml").write_text(
+        '[[reference]]\nkind = "lfm"\nf_low_hz = 19000.0\nf_high_hz = 29000.0\nduration_s = 0.05\nwindow = "rect"\n'
+        'train_count = 4\ntrain_spacing_s = 0.25\npostamble_s = 8.27\npostamble_count = 3\n')
+    assert _cli("tx", "--reference", tmp_path / "p.toml", "--count", 2, "--period", 12, "--start", 0.3,
+                "--sample-rate", 96000, "-o", tmp_path / "p.wav", "-q") == 0
+    assert _cli("rx", tmp_path / "p.wav", "--reference", tmp_path / "p.json", "-o", tmp_path / "p.csv", "-q") == 0
+    table = pd.read_csv(tmp_path / "p.csv").sort_values("t_arrival_s")
+    assert list(table["frame_index"]) == [0] * 7 + [1] * 7
+    assert list(table["train_position"]) == [0, 1, 2, 3, 0, 1, 2] * 2
+    offsets = [o for o, _, _ in PACKET.packet()]
+    np.testing.assert_allclose(table["t_emit_s"], [0.3 + o for o in offsets] + [12.3 + o for o in offsets], atol=1e-9)
+    assert (abs(table["tof_s"]) < 1e-5).all()  # no channel: arrival = emission
+
+
+def test_a_mat_template_takes_sample_rate_and_variable_from_the_command_line(tmp_path):
+    """A template cut from a .mat without a rate: --sample-rate and --mat-variable reach it (they were ignored,
+    and the error then asked for --sample-rate)."""
+    from scipy.io import savemat
+
+    from seamodem.transmit.reference import ReferenceWaveform, reference_replica
+
+    fs = 96000.0
+    ping = partial(chirp_ping, f0=19e3, f1=29e3, duration_s=0.05, method="linear")
+    savemat(tmp_path / "tpl.mat", {"ping": ping(np.arange(int(0.05 * fs)) / fs)[:, None]})
+    emit = np.array([0.2, 1.2, 2.2])
+    x = received(ping, fs=fs, duration_s=3.0, arrivals_s=emit + 0.1, v_mps=0.0, ping_duration_s=0.05)
+    import soundfile
+
+    soundfile.write(tmp_path / "rec.wav", 0.3 * x, int(fs), subtype="FLOAT")
+    code = _cli("rx", tmp_path / "rec.wav", "--reference", f"template:{tmp_path / 'tpl.mat'}",
+                "--sample-rate", 96000, "--mat-variable", "ping", "--emit-start", 0.2, "--emit-period", 1,
+                "--sound-speed", 1500, "-o", tmp_path / "t.csv", "-q")
+    assert code == 0
+    import pandas as pd
+
+    np.testing.assert_allclose(pd.read_csv(tmp_path / "t.csv")["tof_s"], 0.1, atol=2e-6)
+    assert reference_replica(ReferenceWaveform(kind="template", file=str(tmp_path / "tpl.mat"), sample_rate_hz=fs,
+                                               mat_variable="ping")) is not None

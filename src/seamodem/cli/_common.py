@@ -15,7 +15,7 @@ from ..config import FrameConfig, get_preset, load_config
 from ..errors import SeamodemError
 from ..io.files import check_writable
 
-__all__ = ["DEFAULT_SOUND_SPEED_MPS", "sound_speed", "add_config_options", "config_from_args", "command_line", "emit_schedule",
+__all__ = ["DEFAULT_SOUND_SPEED_MPS", "sound_speed", "sound_speed_words", "add_config_options", "config_from_args", "command_line", "emit_schedule",
            "output_path", "reported_warnings"]
 
 #: c when neither --sound-speed nor a sidecar gives one [m/s]
@@ -23,10 +23,11 @@ DEFAULT_SOUND_SPEED_MPS = 1500.0
 
 
 def sound_speed(args, sidecar: dict | None) -> float:
-    """c for every receiver mode: --sound-speed, else the recording's sidecar, else 1500 m/s with a note.
+    """c for every receiver mode: --sound-speed, else the recording's sidecar, else 1500 m/s.
 
     Outside 1400–1600 m/s it is refused unless ``--force-sound-speed``
-    (:func:`~seamodem.receive.settings.resolve_sound_speed`).
+    (:func:`~seamodem.receive.settings.resolve_sound_speed`). Where it came from is kept in
+    ``args.sound_speed_origin`` for the run's summary (:func:`sound_speed_words`).
     """
     from ..errors import ConfigError, SeamodemError
     from ..receive.settings import resolve_sound_speed
@@ -35,10 +36,15 @@ def sound_speed(args, sidecar: dict | None) -> float:
         value, origin = resolve_sound_speed(args.sound_speed, sidecar, force=args.force_sound_speed)
     except ConfigError as exc:
         raise SeamodemError(f"sound-speed: {exc.message}") from None
-    if origin == "default" and not args.quiet:
-        print(f"seamodem rx: note: c = {value:g} m/s (no --sound-speed, and the recording's sidecar gives none)",
-              file=sys.stderr)
+    args.sound_speed_origin = origin
     return value
+
+
+def sound_speed_words(args, value: float) -> str:
+    """``c = 1500 m/s`` for a run's summary, saying so when it is the default nobody gave."""
+    if getattr(args, "sound_speed_origin", "") == "default":
+        return f"c = {value:g} m/s: the default, neither --sound-speed nor the recording's sidecar gave one"
+    return f"c = {value:g} m/s from the {getattr(args, 'sound_speed_origin', 'option')}"
 
 
 def add_config_options(parser: argparse.ArgumentParser) -> None:

@@ -18,7 +18,7 @@ import warnings
 from pathlib import Path
 from typing import NamedTuple
 
-from ..errors import InputFileError, SeamodemError
+from ..errors import ConfigError, InputFileError, SeamodemError
 from ..io.files import check_writable
 from ._common import (
     add_config_options,
@@ -27,6 +27,7 @@ from ._common import (
     emit_schedule,
     reported_warnings,
     sound_speed,
+    sound_speed_words,
 )
 
 #: the options that make ``seamodem rx`` a batch decode even for one recording
@@ -307,10 +308,13 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
                                    channel=args.channel, pilot=inputs.pilot, payloads=inputs.payloads,
                                    on_frame=on_frame, progress=False if args.quiet else None)
         counted = _Counted(records)
-        n = write_measurements(out, counted, header)
+        try:
+            n = write_measurements(out, counted, header)
+        except ConfigError as exc:  # what the recording cannot hold (its rate, its band): name it
+            raise exc.in_file(f"recording {inputs.path}") from None
         _warn_unmatched(counted.unmatched)
     if not args.quiet:
-        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured (c = {inputs.settings.sound_speed_mps:g} m/s)"
+        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured ({sound_speed_words(args, inputs.settings.sound_speed_mps)})"
               + (f"; {len(counted.unmatched)} arrival(s) before the first emission not written"
                  if counted.unmatched else ""))
         if args.decode and counted.decoded:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..errors import ConfigError, InputFileError, SeamodemError
 from ..io.files import check_writable
-from ._common import command_line, emit_schedule, sound_speed
+from ._common import command_line, emit_schedule, sound_speed, sound_speed_words
 
 __all__ = ["add_reference_options", "run_reference", "write_reference_records"]
 
@@ -35,8 +35,8 @@ def add_reference_options(p: argparse.ArgumentParser) -> None:
         help="lfm:F1-F2:DURATION, hfm:F1-F2:DURATION, pn:CARRIER:CHIPRATE:DEGREE, template:FILE[:START-STOP], "
         "a TOML/JSON file, or a reference sidecar (repeatable: several references in one recording)",
     )
-    g.add_argument("--mat-variable", metavar="NAME", help=".mat recordings: the variable holding the samples")
-    g.add_argument("--sample-rate", type=float, metavar="HZ", help="sample rate when the file has none (.mat), or to override it")
+    g.add_argument("--mat-variable", metavar="NAME", help=".mat recordings and .mat templates: the variable holding the samples")
+    g.add_argument("--sample-rate", type=float, metavar="HZ", help="sample rate when the file has none (.mat recordings and templates), or to override the recording's")
     g.add_argument(
         "--all-channels",
         action="store_true",
@@ -159,13 +159,16 @@ def run_reference(args: argparse.Namespace) -> int:
     if args.all_channels and args.channel is not None:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
 
+    from ..io.matlab import is_mat
     from ..io.source import open_recording
     from ..io.wav import RecordingWarning
     from ..transmit.reference import load_references
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RecordingWarning)
-        source = open_recording(recording, mat_variable=args.mat_variable, sample_rate_hz=args.sample_rate)
+        # --mat-variable names a .mat recording's variable, and a .mat template's (_with_template_options)
+        source = open_recording(recording, mat_variable=args.mat_variable if is_mat(recording) else None,
+                                sample_rate_hz=args.sample_rate)
     for w in caught:
         print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
     if source.n_channels > 1 and args.channel is None and not args.all_channels:
@@ -238,5 +241,5 @@ def run_reference(args: argparse.Namespace) -> int:
     if not args.quiet:
         per = {r.name: sum(rec.reference == r.name for rec in records) for r in receiver.references}
         listed = ", ".join(f"{k}: {v}" for k, v in per.items())
-        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; c = {c:g} m/s)")
+        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; {sound_speed_words(args, c)})")
     return 0

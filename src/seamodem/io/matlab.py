@@ -194,25 +194,38 @@ def _open_mat73(path: Path, variable: str | None) -> MatFile:
         f = h5py.File(path, "r")
     except OSError as exc:
         raise InputFileError(f"{path} is not a readable MATLAB v7.3 file: {exc}") from None
-    with f:
-        datasets = {k: v for k, v in f.items() if isinstance(v, h5py.Dataset)}
-        shapes = {k: tuple(v.shape) for k, v in datasets.items()}
-        numeric = {k for k, v in datasets.items() if v.dtype.names is None and np.issubdtype(v.dtype, np.number)}
-        complex_ = {
-            k for k, v in datasets.items()
-            if (v.dtype.names and {"real", "imag"} <= set(v.dtype.names)) or np.issubdtype(v.dtype, np.complexfloating)
-        }
-        numeric -= complex_
-        name = _choose_variable(shapes, numeric | complex_, path, variable)
-        ds = datasets[name]
-        if ds.dtype.names is not None and name not in complex_:
-            raise InputFileError(f"{path}: variable {name!r} is not a numeric array")
-        n, n_ch, time_first = _check_shape(path, name, ds.shape, None if name in complex_ else ds.dtype, name in complex_)
-        in_file = _rate_from({k: datasets[k][()] for k in MAT_RATE_NAMES if k in numeric}, path)
-        level = _mat_clip_level(ds.dtype)
+    try:
+        with f:
+            datasets = {k: v for k, v in f.items() if isinstance(v, h5py.Dataset)}
+            shapes = {k: tuple(v.shape) for k, v in datasets.items()}
+            numeric = {k for k, v in datasets.items() if v.dtype.names is None and np.issubdtype(v.dtype, np.number)}
+            complex_ = {
+                k for k, v in datasets.items()
+                if (v.dtype.names and {"real", "imag"} <= set(v.dtype.names)) or np.issubdtype(v.dtype, np.complexfloating)
+            }
+            numeric -= complex_
+            name = _choose_variable(shapes, numeric | complex_, path, variable)
+            ds = datasets[name]
+            if ds.dtype.names is not None and name not in complex_:
+                raise InputFileError(f"{path}: variable {name!r} is not a numeric array")
+            n, n_ch, time_first = _check_shape(path, name, ds.shape, None if name in complex_ else ds.dtype, name in complex_)
+            in_file = _rate_from({k: datasets[k][()] for k in MAT_RATE_NAMES if k in numeric}, path)
+            level = _mat_clip_level(ds.dtype)
+    except InputFileError:
+        raise
+    except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:  # h5py on a damaged file
+        raise InputFileError(f"{path} is not a readable MATLAB v7.3 file: {exc}") from None
     squeeze = len(ds.shape) > 2
 
     def reader(channels, start, stop, block):
+        try:
+            yield from _read73(channels, start, stop, block)
+        except InputFileError:
+            raise
+        except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:  # damaged data blocks
+            raise InputFileError(f"recording {path}: its samples cannot be read (damaged file?): {exc}") from None
+
+    def _read73(channels, start, stop, block):
         with h5py.File(path, "r") as f:
             d = f[name]
             for lo in range(start, stop, block):

@@ -59,11 +59,15 @@ def read_sidecar(path: str | Path) -> dict[str, Any]:
         data = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise InputFileError(f"sidecar {path} is not valid JSON: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputFileError(f"sidecar {path} is not UTF-8 text (byte {exc.start}): not a sidecar, or damaged") from None
     if not isinstance(data, dict) or data.get("format") != SIDECAR_FORMAT:
         raise InputFileError(f"{path} is not a seamodem sidecar (format {SIDECAR_FORMAT!r} expected)")
-    for key in ("config", "pilot", "schedule", "recording", "frames"):
+    for key, kind in (("config", dict), ("pilot", dict), ("schedule", dict), ("recording", dict), ("frames", list)):
         if key not in data:
             raise InputFileError(f"sidecar {path} lacks its {key!r} section")
+        if not isinstance(data[key], kind):
+            raise InputFileError(f"sidecar {path}: its {key!r} section is not a JSON {'object' if kind is dict else 'list'}")
     return data
 
 
@@ -79,5 +83,5 @@ def sidecar_payloads(sidecar: dict[str, Any]) -> list[bytes] | None:
     """Each frame's payload, by frame index, or None when a frame lacks a valid ``payload_hex``."""
     try:
         return [bytes.fromhex(f["payload_hex"]) for f in sidecar["frames"]]
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, AttributeError):
         return None
