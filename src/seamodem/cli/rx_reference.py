@@ -175,6 +175,9 @@ def run_reference(args: argparse.Namespace) -> int:
         raise InputFileError(f"recording {recording} has {source.n_channels} channels: choose one with --channel, or --all-channels")
     channels = source.check_channel(None if args.all_channels else (args.channel or 0))
     references = [_with_template_options(r, args) for spec in args.reference for r in load_references(spec)]
+    if args.mat_variable and not is_mat(recording) and not any(
+            r.kind == "template" and is_mat(r.file) for r in references):
+        raise SeamodemError(f"mat-variable: {recording} is not a .mat file, nor is any template")
     sidecar = _own_sidecar(recording)
     c = settings.sound_speed_mps
     emissions = _reference_emissions(args, sidecar, references)
