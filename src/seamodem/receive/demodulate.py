@@ -287,7 +287,10 @@ def decode_through_echoes(
     subtracted from the baseband (SAGE-style interference cancellation), and
     the cleaned signal is compensated at the direct path's fitted Doppler and
     drift, equalised and decoded again. Until the CRC passes, this repeats
-    ``iterations`` times from the new decisions.
+    from the new decisions, up to ``iterations`` times (the equaliser's output
+    SNR is no guide: on fading corpus frames a pass that left it flat took the
+    BER from 0.34 to 0.09, and the next decoded). A lone resolved path is left
+    as it is (nothing to cancel).
 
     Parameters
     ----------
@@ -316,6 +319,8 @@ def decode_through_echoes(
     delays = np.asarray(delays_s, dtype=float)
     dec, used = first, first.passes
     v = v_mps
+    if delays.size < 2:
+        return first  # a lone resolved path: nothing to cancel
     for _ in range(iterations):
         if dec.info_bits is None:
             break
@@ -329,12 +334,10 @@ def decode_through_echoes(
             break
         d = int(np.argmin(np.abs(wf.delays_s - first_s)))
         others = [p for p in range(len(wf.delays_s)) if p != d]
-        clean = bb
-        if others:
-            lo, contrib = echo_contributions(len(bb), fs, t0_s, config=config, symbols=symbols, fit=wf, paths=others,
-                                             sound_speed_mps=c)
-            clean = bb.copy()
-            clean[lo : lo + contrib.size] -= contrib
+        lo, contrib = echo_contributions(len(bb), fs, t0_s, config=config, symbols=symbols, fit=wf, paths=others,
+                                         sound_speed_mps=c)
+        clean = bb.copy()
+        clean[lo : lo + contrib.size] -= contrib
         grid = float(wf.delays_s[d]) + np.linspace(0.0, config.frame_duration_s, 16)
         v_d, a_d = float(wf.v_mps[d]), float(wf.accel_mps2[d])
         dec = decode_received(
@@ -386,7 +389,7 @@ def demodulate(
         track_t_s=m.track_t_s if settings.follow_track else None,
         track_v_mps=m.track_v_mps if settings.follow_track else None,
     )
-    if dec.crc_ok or ECHO_CANCEL_ITERATIONS < 1:
+    if dec.crc_ok or ECHO_CANCEL_ITERATIONS < 1 or config.modulation not in ("bpsk", "qpsk"):
         return dec
     # second pass: the echoes, each at its own delay and Doppler, cancelled with the first pass's decisions
     from .multipath import find_echoes
