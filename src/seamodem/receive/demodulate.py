@@ -306,9 +306,9 @@ def decode_through_echoes(
     Returns
     -------
     FrameDecode
-        The first decode whose CRC passed, else the last one; its ``passes``
-        count every equaliser pass run on the frame (first pass included), so
-        a count beyond ``passes`` says the echoes were cancelled.
+        The first decode whose CRC passed, else ``first`` unchanged; its
+        ``passes`` count every equaliser pass run on the frame (first pass
+        included), so a count beyond ``passes`` says the echoes were cancelled.
     """
     from ..transmit.modulation import bits_to_symbols
     from .compensate import echo_contributions
@@ -349,7 +349,9 @@ def decode_through_echoes(
         if dec.crc_ok:
             break
         delays, first_s, v = wf.delays_s, float(wf.delays_s[d]), v_d
-    return dataclasses.replace(dec, passes=used)
+    # a frame the cancellation did not recover keeps its first pass (its decisions feed the whole-frame
+    # Doppler fit and its σ rules, frame.py), with the passes run counted
+    return dataclasses.replace(dec if dec.crc_ok else first, passes=used)
 
 
 def demodulate(
