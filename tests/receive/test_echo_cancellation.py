@@ -49,3 +49,22 @@ def test_an_echo_with_its_own_doppler_is_cancelled_and_the_frame_decodes(recordi
     assert new[0].decode_passes > ReceiverSettings().turbo_passes
     for a, b in zip(old[1:], new[1:]):
         assert a == b
+
+
+def test_a_frame_the_second_pass_does_not_recover_keeps_its_first_pass():
+    from seamodem.receive.demodulate import FrameDecode, decode_through_echoes
+    from seamodem.transmit.pilot import pilot_symbols
+
+    rng = np.random.default_rng(3)
+    fs = 13736.142857142857  # the data baseband's rate for jmse2024
+    bb = (rng.standard_normal(int(1.0 * fs)) + 1j * rng.standard_normal(int(1.0 * fs))) / np.sqrt(2)
+    first = FrameDecode(payload=b"", crc_ok=False, eq_snr_db=-1.0, passes=3, ber=0.5, raw_ber=0.5, compensated=None,
+                        equalized=np.zeros(CFG.n_data, complex),
+                        info_bits=rng.integers(0, 2, CFG.n_info_bits).astype(np.uint8))
+    common = dict(config=CFG, pilot=pilot_symbols(CFG.n_pilot, CFG.pilot_seed), first=first, first_s=0.3,
+                  v_mps=0.0, sound_speed_mps=1500.0)
+    dec = decode_through_echoes(bb, fs, 0.0, delays_s=[0.3, 0.3025], **common)
+    assert not dec.crc_ok and dec.passes > first.passes
+    assert dec.eq_snr_db == first.eq_snr_db and dec.info_bits is first.info_bits
+    # a lone path: nothing to cancel, the first pass as it was
+    assert decode_through_echoes(bb, fs, 0.0, delays_s=[0.3], **common) is first
