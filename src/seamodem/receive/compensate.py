@@ -23,7 +23,7 @@ import numpy as np
 from ..config import FrameConfig
 from .doppler import matched_filter
 
-__all__ = ["CompensatedFrame", "compensate_frame"]
+__all__ = ["CompensatedFrame", "compensate_frame", "echo_contributions"]
 
 
 @dataclass(frozen=True)
@@ -109,3 +109,57 @@ def compensate_frame(
     raw = matched_filter(bb, fs, t0_s, t_start_s + (config.n_guard + np.arange(n)) * T, config=config)
     raw_gain = np.conj(pilots) @ raw[: config.n_pilot] / config.n_pilot
     return CompensatedFrame(symbols=y / gain, times_s=t_hat, phases_rad=phases, gain=gain, raw=raw / raw_gain)
+
+
+def echo_contributions(
+    n_samples: int,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    symbols: np.ndarray,
+    fit,
+    paths,
+    sound_speed_mps: float,
+) -> tuple[int, np.ndarray]:
+    """Sum of the chosen paths' synthesized contributions to the data baseband, from a whole-frame fit.
+
+    Each path p of ``fit`` (:class:`~seamodem.receive.wholeframe.WholeFrameFit`) is
+    rebuilt as in the fit's own model (module :mod:`~seamodem.receive.wholeframe`):
+    the frame's ``symbols`` as SRRC pulses at the instants its delay, Doppler and
+    drift give, its time scale exact, times its complex gain and carrier phase.
+
+    Parameters
+    ----------
+    n_samples : int
+        Length of the baseband bb[n] at t0 + n/fs [s] the contributions are for.
+    symbols : numpy.ndarray, complex, shape (n_pilot + n_data,)
+        Pilots then the data symbols (decided or known).
+    fit : WholeFrameFit
+    paths : sequence of int
+        Indices of the paths (in ``fit``) to synthesize.
+
+    Returns
+    -------
+    lo : int
+        First baseband index the contributions cover.
+    contribution : numpy.ndarray, complex
+        Σ_p s_p[n] for n in [lo, lo + len).
+    """
+    from .wholeframe import _instants, _phase, _Segment
+
+    c = sound_speed_mps
+    span = config.srrc_span_symbols * int(fs * config.symbol_period_s + 1)
+    delays = np.asarray(fit.delays_s, dtype=float)
+    lo = max(0, int((float(delays.min()) - t0_s) * fs) - span)
+    hi = min(n_samples, int((float(delays.max()) + config.frame_duration_s - t0_s) * fs) + span)
+    if hi <= lo:
+        return lo, np.zeros(0, complex)
+    seg = _Segment(hi - lo, fs, t0_s + lo / fs, config=config)
+    x = np.asarray(symbols, dtype=complex)
+    total = np.zeros(hi - lo, complex)
+    for p in paths:
+        eps, beta, tau = fit.v_mps[p] / c, fit.accel_mps2[p] / c, delays[p]
+        shape = seg.synthesize(x, _instants(config, tau, eps, beta), scale=1 + eps)
+        total += fit.amplitudes[p] * shape * np.exp(1j * _phase(config, seg.t_s - tau, eps, beta))
+    return lo, total

@@ -23,12 +23,17 @@ __all__ = [
     "fractional_samples",
     "decode_frame",
     "decode_received",
+    "decode_through_echoes",
     "demodulate",
     "payload_fields",
     "FrameDecode",
     "channel_span_symbols",
     "dfe_for_span",
 ]
+
+
+#: decoding passes with the echoes cancelled (:func:`decode_through_echoes`) run on a frame whose CRC failed
+ECHO_CANCEL_ITERATIONS = 2
 
 
 def fractional_samples(bb: np.ndarray, fs: float, t0_s: float, compensated, config: FrameConfig, sps: int = 2) -> np.ndarray:
@@ -165,6 +170,8 @@ class FrameDecode:
         The eq 10–11 symbols the decoder started from (for plots).
     equalized : numpy.ndarray, complex, shape (n_data,)
         The DFE's outputs over the data, before decisions (for plots).
+    info_bits : numpy.ndarray of uint8, optional
+        The decoder's information bits (its decisions, CRC passed or not).
     """
 
     payload: bytes
@@ -175,6 +182,7 @@ class FrameDecode:
     raw_ber: float
     compensated: object
     equalized: np.ndarray
+    info_bits: np.ndarray | None = None
 
 
 def decode_received(
@@ -248,7 +256,102 @@ def decode_received(
         raw_ber=raw_ber,
         compensated=comp,
         equalized=res.dfe.soft[config.n_pilot :],
+        info_bits=np.asarray(res.decoded.info_bits),
     )
+
+
+def decode_through_echoes(
+    bb: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    first: FrameDecode,
+    delays_s,
+    first_s: float,
+    v_mps: float,
+    sound_speed_mps: float,
+    settings: DfeSettings | None = None,
+    passes: int = 3,
+    sent_payload: bytes | None = None,
+    iterations: int = 2,
+) -> FrameDecode:
+    """Second decoding pass of a frame whose CRC failed: every echo cancelled at its own Doppler.
+
+    The first pass's decoder decisions (re-encoded: pilots and every data
+    symbol) are the reference of a whole-frame fit of each resolved path's
+    delay, gain, Doppler and drift (:func:`~seamodem.receive.wholeframe.fit_whole_frame`).
+    Every path but the direct one is synthesized at its own delay, gain and
+    Doppler (:func:`~seamodem.receive.compensate.echo_contributions`) and
+    subtracted from the baseband (SAGE-style interference cancellation), and
+    the cleaned signal is compensated at the direct path's fitted Doppler and
+    drift, equalised and decoded again. Until the CRC passes, this repeats
+    from the new decisions, up to ``iterations`` times (the equaliser's output
+    SNR is no guide: on fading corpus frames a pass that left it flat took the
+    BER from 0.34 to 0.09, and the next decoded). A lone resolved path is left
+    as it is (nothing to cancel).
+
+    Parameters
+    ----------
+    first : FrameDecode
+        The first pass (its ``info_bits`` are the decisions).
+    delays_s : array_like
+        Frame-start arrival of each resolved path [s] (pilot fit with echoes).
+    first_s : float
+        The direct path's arrival [s].
+    v_mps : float
+        Starting closing speed of every path [m/s] (the first pass's).
+
+    Returns
+    -------
+    FrameDecode
+        The first decode whose CRC passed, else ``first`` unchanged; its
+        ``passes`` count every equaliser pass run on the frame (first pass
+        included), so a count beyond ``passes`` says the echoes were cancelled.
+    """
+    from ..transmit.modulation import bits_to_symbols
+    from .compensate import echo_contributions
+    from .wholeframe import fit_whole_frame
+
+    c = sound_speed_mps
+    pilot = np.asarray(pilot, dtype=complex)
+    delays = np.asarray(delays_s, dtype=float)
+    dec, used = first, first.passes
+    v = v_mps
+    if delays.size < 2:
+        return first  # a lone resolved path: nothing to cancel
+    for _ in range(iterations):
+        if dec.info_bits is None:
+            break
+        data = bits_to_symbols(encode_info(np.asarray(dec.info_bits), config), config.modulation)[: config.n_data]
+        reference = np.ones(config.n_pilot + config.n_data, bool)
+        symbols = np.concatenate([pilot, data])
+        try:
+            wf = fit_whole_frame(bb, fs, t0_s, config=config, symbols=symbols, reference=reference, delays_s=delays,
+                                 v_mps=v, sound_speed_mps=c)
+        except ValueError:
+            break
+        d = int(np.argmin(np.abs(wf.delays_s - first_s)))
+        others = [p for p in range(len(wf.delays_s)) if p != d]
+        lo, contrib = echo_contributions(len(bb), fs, t0_s, config=config, symbols=symbols, fit=wf, paths=others,
+                                         sound_speed_mps=c)
+        clean = bb.copy()
+        clean[lo : lo + contrib.size] -= contrib
+        grid = float(wf.delays_s[d]) + np.linspace(0.0, config.frame_duration_s, 16)
+        v_d, a_d = float(wf.v_mps[d]), float(wf.accel_mps2[d])
+        dec = decode_received(
+            clean, fs, t0_s, config=config, pilot=pilot, t_start_s=float(wf.delays_s[d]), v_mps=v_d,
+            sound_speed_mps=c, settings=settings, passes=passes, sent_payload=sent_payload,
+            track_t_s=grid, track_v_mps=v_d + a_d * (grid - grid.mean()),
+        )
+        used += dec.passes
+        if dec.crc_ok:
+            break
+        delays, first_s, v = wf.delays_s, float(wf.delays_s[d]), v_d
+    # a frame the cancellation did not recover keeps its first pass (its decisions feed the whole-frame
+    # Doppler fit and its σ rules, frame.py), with the passes run counted
+    return dataclasses.replace(dec if dec.crc_ok else first, passes=used)
 
 
 def demodulate(
@@ -266,11 +369,14 @@ def demodulate(
 
     Compensation runs at the frame's mean speed
     (:attr:`FrameMeasurement.compensation_speed_mps`), along its eq 9 track when
-    ``settings.follow_track``.
+    ``settings.follow_track``. When the CRC fails, every resolved echo is
+    cancelled at its own delay, gain and Doppler and the frame decoded again
+    (:func:`decode_through_echoes`, up to :data:`ECHO_CANCEL_ITERATIONS` times);
+    frames that decode first time are untouched.
     """
     if not settings.decode or not m.complete:
         return None
-    return decode_received(
+    dec = decode_received(
         bb,
         fs,
         t0_s,
@@ -284,6 +390,19 @@ def demodulate(
         sent_payload=sent_payload,
         track_t_s=m.track_t_s if settings.follow_track else None,
         track_v_mps=m.track_v_mps if settings.follow_track else None,
+    )
+    if dec.crc_ok or ECHO_CANCEL_ITERATIONS < 1 or config.modulation not in ("bpsk", "qpsk"):
+        return dec
+    # second pass: the echoes, each at its own delay and Doppler, cancelled with the first pass's decisions
+    from .multipath import find_echoes
+
+    c = settings.sound_speed_mps
+    paths = m.echoes if m.echoes is not None else find_echoes(bb, fs, t0_s, config=config, pilot=pilot, paths=m.paths,
+                                                              eps=m.pilot.v_mps / c)
+    return decode_through_echoes(
+        bb, fs, t0_s, config=config, pilot=pilot, first=dec, delays_s=paths.delays_s, first_s=paths.first_s,
+        v_mps=m.compensation_speed_mps, sound_speed_mps=c, settings=settings.equalizer,
+        passes=settings.turbo_passes, sent_payload=sent_payload, iterations=ECHO_CANCEL_ITERATIONS,
     )
 
 

@@ -107,7 +107,9 @@ class MeasurementRecord:
     eq_snr_db : float
         SNR at the equaliser output [dB]; NaN when not decoded.
     decode_passes : int
-        Equaliser passes run (1: DFE alone; more: turbo); 0 when not decoded.
+        Equaliser passes run (1: DFE alone; more: turbo; beyond the turbo
+        passes: a second pass with the echoes cancelled at their own Doppler,
+        :func:`~seamodem.receive.demodulate.decode_through_echoes`); 0 when not decoded.
     ber : float
         Information-bit error rate after decoding, against the payload sent
         (sidecar); NaN when unknown or not decoded.
