@@ -350,6 +350,16 @@ PRESET_NOTES: dict[str, str] = {
 def get_preset(name: str) -> FrameConfig:
     """Return the named preset.
 
+    Parameters
+    ----------
+    name : str
+        A key of ``PRESETS`` (e.g. ``"oceans2021"``).
+
+    Returns
+    -------
+    FrameConfig
+        The preset's frame configuration.
+
     Raises
     ------
     ConfigError
@@ -381,7 +391,29 @@ def _read_mapping(path: Path) -> dict[str, Any]:
 
 
 def load_config(path: str | Path, *, base: FrameConfig | None = None) -> FrameConfig:
-    """Read a configuration from a TOML or JSON file (or a sidecar), over ``base``."""
+    """Read a configuration from a TOML or JSON file (or a sidecar), over ``base``.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.toml`` file, or JSON (any other suffix); a ``seamodem tx``
+        sidecar is read from its ``config`` table.
+    base : FrameConfig or None, optional
+        Values for the keys the file leaves out (e.g. a preset); None
+        requires every parameter without a default.
+
+    Returns
+    -------
+    FrameConfig
+        The validated configuration.
+
+    Raises
+    ------
+    InputFileError
+        Missing file, invalid TOML/JSON, or not a table.
+    ConfigError
+        Unknown or missing key, or an invalid value.
+    """
     return FrameConfig.from_dict(_read_mapping(Path(path)), base=base)
 
 
@@ -391,6 +423,14 @@ def config_text(config: FrameConfig, suffix: str) -> str:
 
 
 def save_config(config: FrameConfig, path: str | Path) -> None:
-    """Write a configuration as TOML (``.toml``) or JSON (any other suffix)."""
+    """Write a configuration as TOML (``.toml``) or JSON (any other suffix).
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The configuration.
+    path : str or Path
+        Output file, overwritten; its suffix chooses the format.
+    """
     path = Path(path)
     path.write_text(config_text(config, path.suffix), encoding="utf-8")

@@ -40,7 +40,23 @@ def lowpass_taps(fs: float, passband_hz: float, stopband_hz: float, attenuation_
 
 
 def bb2pb(x_bb: np.ndarray, fs: float, fc: float, *, t0_s: float = 0.0) -> np.ndarray:
-    """Re[x_bb · exp(j2π fc t)] with t = t0 + n/fs [s]."""
+    """Re[x_bb · exp(j2π fc t)] with t = t0 + n/fs [s].
+
+    Parameters
+    ----------
+    x_bb : numpy.ndarray, shape (n_samples,)
+        Complex baseband samples at ``fs``.
+    fs, fc : float
+        Sample rate and carrier [Hz].
+    t0_s : float
+        Time of the first sample [s] (carrier phase reference); default 0.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_samples,)
+        Real passband samples (no factor 2: a unit baseband tone gives a
+        carrier of amplitude 1).
+    """
     t = t0_s + np.arange(len(x_bb)) / fs
     return np.real(np.asarray(x_bb) * np.exp(2j * np.pi * fc * t))
 

@@ -105,12 +105,35 @@ def _guard_s(rec: Recording) -> float:
 
 
 def min_overlap_s(rec: Recording) -> float:
-    """Smallest overlap of segments for ``rec``: a frame's span plus the reconciling guard [s]."""
+    """Smallest overlap of segments for ``rec``: a frame's span plus the reconciling guard [s].
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (its frame config and receiver settings set the span).
+
+    Returns
+    -------
+    float
+        Overlap [s]: the longest a frame can last at the settings' largest
+        speed, plus ``GUARD_FRAMES`` frame durations.
+    """
     return _frame_span_s(rec) + _guard_s(rec)
 
 
 def default_overlap_s(rec: Recording) -> float:
-    """Overlap giving a frame near a boundary the same detection context as in the whole file [s]."""
+    """Overlap giving a frame near a boundary the same detection context as in the whole file [s].
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording.
+
+    Returns
+    -------
+    float
+        :func:`min_overlap_s` plus the detector's context and noise windows [s].
+    """
     return min_overlap_s(rec) + DETECTION_CONTEXT_S + NOISE_GAP_S + NOISE_WINDOW_S
 
 
@@ -141,6 +164,7 @@ class Part:
 
     @property
     def label(self) -> str:
+        """The recording's path, plus ``segment k/n [t0, t1) s`` when it was cut."""
         if self.n_segments == 1:
             return str(self.recording.path)
         return (
@@ -180,6 +204,25 @@ def plan_parts(
     recordings: Sequence[Recording], *, segment_s: float | None = None, overlap_s: float | None = None
 ) -> tuple[list[Part], list[tuple[int, str]]]:
     """Cut recordings into parts; returns (parts, [(file_index, error)] of unreadable files).
+
+    Parameters
+    ----------
+    recordings : sequence of Recording
+        The recordings to decode.
+    segment_s : float or None, optional
+        Length of a segment [s]; None (or a segment longer than the file)
+        keeps each file whole. Must exceed half a frame.
+    overlap_s : float or None, optional
+        Samples read on each side of a segment [s], at least
+        :func:`min_overlap_s`; None uses :func:`default_overlap_s`.
+
+    Returns
+    -------
+    parts : list of Part
+        The work units, file by file, segment by segment.
+    failed : list of tuple
+        ``(file_index, error)`` for each recording that could not be opened,
+        the error as one line.
 
     Raises
     ------
@@ -285,7 +328,16 @@ def _on_file_clock(r: MeasurementRecord, t_arrival_s: float, emissions: Emission
 
 @dataclass(frozen=True)
 class PartFailure:
-    """A recording or segment that could not be decoded, and why (one line)."""
+    """A recording or segment that could not be decoded, and why (one line).
+
+    Attributes
+    ----------
+    label : str
+        The recording's path, with the segment and its time span [s] when
+        the file was cut.
+    error : str
+        The error message, one line.
+    """
 
     label: str
     error: str

@@ -62,7 +62,14 @@ class TaskResult:
 
 
 def default_workers() -> int:
-    """Local worker processes by default: the CPUs this process may use."""
+    """Local worker processes by default: the CPUs this process may use.
+
+    Returns
+    -------
+    int
+        Number of CPUs in this process's affinity mask (elsewhere than
+        Linux: ``os.cpu_count()``), at least 1.
+    """
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not on Linux
@@ -189,6 +196,21 @@ def map_tasks(fn: Callable[[Any], Any], tasks: Iterable, **options) -> list:
     Takes the options of :func:`run_tasks`; ``functools.partial(map_tasks,
     backend="dask", scheduler=...)`` is a ``mapper(fn, iterable)`` as
     :func:`seamodem.studies.ber.ber_sweep` takes.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function of one task.
+    tasks : iterable
+        Picklable task descriptions.
+    **options
+        ``backend``, ``workers``, ``scheduler``, ``progress``, ``on_result``,
+        ``retries``, ``desc`` of :func:`run_tasks`.
+
+    Returns
+    -------
+    list
+        ``fn(t)`` for each task, in task order.
 
     Raises
     ------

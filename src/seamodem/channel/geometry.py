@@ -38,13 +38,48 @@ class Trajectory:
     parameter = "vehicle"
 
     def position(self, t_s) -> np.ndarray:
+        """Vehicle position at the given times.
+
+        Parameters
+        ----------
+        t_s : float or array_like
+            Times [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            Positions [m], shape ``(3, n_times)``.
+        """
         raise NotImplementedError
 
     def max_speed(self, t0_s: float, t1_s: float) -> float:
+        """Largest speed |dr/dt| over [t0, t1].
+
+        Parameters
+        ----------
+        t0_s, t1_s : float
+            Interval ends [s].
+
+        Returns
+        -------
+        float
+            Speed [m/s].
+        """
         raise NotImplementedError
 
     def z_range(self, t0_s: float, t1_s: float) -> tuple[float, float]:
-        """Lowest and highest z over [t0, t1] [m]."""
+        """Lowest and highest z over [t0, t1] [m].
+
+        Parameters
+        ----------
+        t0_s, t1_s : float
+            Interval ends [s].
+
+        Returns
+        -------
+        tuple of float
+            ``(z_min, z_max)`` [m], z up.
+        """
         t = np.linspace(t0_s, t1_s, 10_001)
         z = self.position(t)[2]
         return float(z.min()), float(z.max())
@@ -52,7 +87,17 @@ class Trajectory:
 
 @dataclass(frozen=True, eq=False)
 class StraightLine(Trajectory):
-    """r(t) = start + velocity · t."""
+    """r(t) = start + velocity · t.
+
+    Attributes
+    ----------
+    start_m : numpy.ndarray
+        Position at t = 0 [m], shape ``(3,)`` (x east, y north, z up).
+    velocity_mps : numpy.ndarray
+        Constant velocity [m/s], shape ``(3,)``.
+    parameter : str
+        Scenario key named in error messages.
+    """
 
     start_m: np.ndarray
     velocity_mps: np.ndarray
@@ -76,6 +121,20 @@ class WaypointTrack(Trajectory):
 
     The vehicle waits at the first waypoint before ``start_s`` and stays at the
     last one after it arrives there.
+
+    Attributes
+    ----------
+    waypoints_m : numpy.ndarray
+        Waypoints [m], shape ``(n_waypoints, 3)``, no two consecutive equal.
+    speed_mps : float
+        Speed along every leg [m/s].
+    start_s : float, optional
+        Time of departure from the first waypoint [s]; default 0.
+    times_s : numpy.ndarray
+        Arrival time at each waypoint [s], shape ``(n_waypoints,)``
+        (computed).
+    parameter : str
+        Scenario key named in error messages.
     """
 
     waypoints_m: np.ndarray  # (n, 3)
@@ -105,7 +164,23 @@ class WaypointTrack(Trajectory):
 
 @dataclass(frozen=True, eq=False)
 class SampledTrack(Trajectory):
-    """A measured or planned track: positions at times, joined by a cubic spline."""
+    """A measured or planned track: positions at times, joined by a cubic spline.
+
+    Held at the first and last position outside ``times_s``.
+
+    Attributes
+    ----------
+    times_s : numpy.ndarray
+        Sample times [s], shape ``(n_points,)``, strictly increasing, n_points ≥ 2.
+    positions_m : numpy.ndarray
+        Positions [m], shape ``(n_points, 3)`` (x east, y north, z up).
+    source : str, optional
+        Where the track came from (a file name), for error messages.
+    spline : scipy.interpolate.CubicSpline
+        The interpolant (computed).
+    parameter : str
+        Scenario key named in error messages.
+    """
 
     times_s: np.ndarray  # (n,)
     positions_m: np.ndarray  # (n, 3)
@@ -123,6 +198,18 @@ class SampledTrack(Trajectory):
         return self.spline(t).T
 
     def check_covers(self, t0_s: float, t1_s: float) -> None:
+        """Check that the track spans the times a recording needs.
+
+        Parameters
+        ----------
+        t0_s, t1_s : float
+            First and last time needed [s]; ``t0_s`` below 0 counts as 0.
+
+        Raises
+        ------
+        ConfigError
+            The track starts after ``max(t0_s, 0)`` or ends before ``t1_s``.
+        """
         if self.times_s[0] > max(t0_s, 0.0) or self.times_s[-1] < t1_s:
             raise ConfigError(
                 self.parameter,
@@ -137,6 +224,16 @@ class SampledTrack(Trajectory):
 
 def read_track_csv(path: str | Path) -> SampledTrack:
     """Read a track file: CSV with a header ``t_s,x_m,y_m,z_m`` (z up, ≤ 0 in the water).
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file; other columns are ignored.
+
+    Returns
+    -------
+    SampledTrack
+        The rows as a spline track, ``source`` set to ``path``.
 
     Raises
     ------
@@ -167,6 +264,17 @@ class ImageSource:
 
     ``name`` spells the reflections in order, e.g. ``"direct"``, ``"S"``
     (surface), ``"B"`` (bottom), ``"SB"`` (surface, then bottom).
+
+    Attributes
+    ----------
+    name : str
+        The path's reflections in order (``"direct"`` for none).
+    position_m : tuple of float
+        The image's position ``(x, y, z)`` [m].
+    n_surface : int
+        Number of surface reflections.
+    n_bottom : int
+        Number of bottom reflections.
     """
 
     name: str
@@ -182,6 +290,20 @@ def image_sources(beacon_m, water_depth_m: float, max_bounces: int) -> list[Imag
     surface and one at the bottom, alternating afterwards. A reflection at the
     surface mirrors z ↦ −z; at the bottom z ↦ −2·depth − z. The image of a
     path with reflections r₁, …, r_k is M_{r_k}(…M_{r₁}(beacon)).
+
+    Parameters
+    ----------
+    beacon_m : array_like
+        Beacon position ``(x, y, z)`` [m], z up, −depth ≤ z ≤ 0.
+    water_depth_m : float
+        Depth of the flat bottom [m], > 0.
+    max_bounces : int
+        Highest number of reflections on one path; 0 gives the direct path only.
+
+    Returns
+    -------
+    list of ImageSource
+        ``1 + 2 * max_bounces`` paths, direct first, then by order.
     """
     x, y, z = (float(v) for v in beacon_m)
     out = [ImageSource("direct", (x, y, z), 0, 0)]

@@ -35,7 +35,25 @@ AMPLITUDE_STEP = 64
 
 @dataclass(frozen=True)
 class PathInfo:
-    """What the sidecar says about one path."""
+    """What the sidecar says about one path.
+
+    Attributes
+    ----------
+    index : int
+        Position of the path in the model, 0 for the direct path.
+    name : str
+        ``"direct"``, a reflection sequence such as ``"SB"`` (geometry mode)
+        or ``"echo1"``, ``"echo2"``, ... (profile mode).
+    n_surface, n_bottom : int, optional
+        Numbers of surface and bottom reflections; default 0.
+    reflection : float, optional
+        Product of the reflection coefficients (profile mode: the echo's
+        gain) [linear]; default 1.
+    image_m : tuple of float or None, optional
+        The beacon image's position ``(x, y, z)`` [m] (geometry mode only).
+    excess_delay_s : float or None, optional
+        Delay relative to the direct path [s] (profile mode only).
+    """
 
     index: int
     name: str
@@ -46,6 +64,7 @@ class PathInfo:
     excess_delay_s: float | None = None
 
     def to_dict(self) -> dict:
+        """The sidecar entry: the fields, without those that are None."""
         out = {"index": self.index, "name": self.name, "n_surface": self.n_surface, "n_bottom": self.n_bottom,
                "reflection": self.reflection}
         if self.image_m is not None:
@@ -56,7 +75,29 @@ class PathInfo:
 
 
 class ChannelModel:
-    """Paths of one scenario; subclasses give ``delays`` and ``amplitudes``."""
+    """Paths of one scenario; subclasses give ``delays`` and ``amplitudes``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The parsed scenario.
+    paths : list of PathInfo
+        The paths, direct first.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario given.
+    c : float
+        Sound speed [m/s].
+    clock : Clock
+        The receiver clock of the scenario.
+    paths : list of PathInfo
+        The paths given.
+    fluctuations : list
+        Per path, its Rician gain process, or None for a steady gain (set by
+        :meth:`add_fluctuations`).
+    """
 
     def __init__(self, scenario: Scenario, paths: list[PathInfo]):
         self.scenario = scenario
@@ -67,24 +108,76 @@ class ChannelModel:
 
     @property
     def n_paths(self) -> int:
+        """Number of paths."""
         return len(self.paths)
 
     def delays(self, t_s) -> np.ndarray:
-        """τ_p at true times ``t_s`` [s], shape (n_paths, n)."""
+        """τ_p at true times ``t_s`` [s], shape (n_paths, n).
+
+        Parameters
+        ----------
+        t_s : array_like
+            True times of reception [s], shape ``(n,)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Delays [s], shape ``(n_paths, n)``.
+        """
         raise NotImplementedError
 
     def amplitudes(self, t_s, delays: np.ndarray) -> np.ndarray:
-        """Steady real path amplitudes, shape (n_paths, n)."""
+        """Steady real path amplitudes, shape (n_paths, n).
+
+        Parameters
+        ----------
+        t_s : array_like
+            True times of reception [s], shape ``(n,)``.
+        delays : numpy.ndarray
+            :meth:`delays` at ``t_s`` [s], shape ``(n_paths, n)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Amplitudes [linear], shape ``(n_paths, n)``.
+        """
         raise NotImplementedError
 
     def check_span(self, t0_s: float, t1_s: float) -> None:
-        """Raise if the scenario is not valid over true times [t0, t1] (speeds, water)."""
+        """Raise if the scenario is not valid over true times [t0, t1] (speeds, water).
+
+        Parameters
+        ----------
+        t0_s, t1_s : float
+            True-time span the simulation needs [s].
+
+        Raises
+        ------
+        ConfigError
+            A speed reaches the sound speed, the vehicle leaves the water,
+            the range reaches zero, or a track does not cover the span.
+        """
 
     def gains(self, t_s, delays: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """Weights of s and of ŝ per path (Re g, −Im g); the second is None without fluctuations.
 
         The steady amplitudes change over metres of travel, not samples: they are
         evaluated every ``AMPLITUDE_STEP`` samples and interpolated linearly.
+
+        Parameters
+        ----------
+        t_s : array_like
+            True times of reception [s], shape ``(n,)``.
+        delays : numpy.ndarray
+            :meth:`delays` at ``t_s`` [s], shape ``(n_paths, n)``.
+
+        Returns
+        -------
+        gi : numpy.ndarray
+            Weights of s, Re g_p [linear], shape ``(n_paths, n)``.
+        gq : numpy.ndarray or None
+            Weights of the Hilbert transform ŝ, −Im g_p, shape
+            ``(n_paths, n)``; None when no path fluctuates.
         """
         t_s = np.asarray(t_s, dtype=float)
         if t_s.size > 4 * AMPLITUDE_STEP:
@@ -105,7 +198,20 @@ class ChannelModel:
         return gi, gq
 
     def end_time(self, input_duration_s: float, fs: float) -> float:
-        """True time by which every path has delivered the input's last sample [s]."""
+        """True time by which every path has delivered the input's last sample [s].
+
+        Parameters
+        ----------
+        input_duration_s : float
+            Duration of the transmitted input [s].
+        fs : float
+            Sample rate [Hz] (sets the interpolator's half-length margin).
+
+        Returns
+        -------
+        float
+            End time [s], the fixed point of t = duration + margin + max τ_p(t).
+        """
         t_in = input_duration_s + (HALF_TAPS + 1) / fs
         t = t_in
         for _ in range(60):
@@ -116,7 +222,18 @@ class ChannelModel:
         return t_next
 
     def add_fluctuations(self, t0_s: float, t1_s: float, rng: np.random.Generator) -> None:
-        """Draw each path's Rician gain over [t0, t1] from [fluctuation]."""
+        """Draw each path's Rician gain over [t0, t1] from [fluctuation].
+
+        Nothing is drawn when the Doppler spread is 0 or for a path whose
+        K-factor is infinite.
+
+        Parameters
+        ----------
+        t0_s, t1_s : float
+            True-time span to cover [s].
+        rng : numpy.random.Generator
+            Source of the random draws.
+        """
         fl = self.scenario.fluctuation
         if fl.doppler_spread_hz <= 0:
             return
@@ -126,11 +243,40 @@ class ChannelModel:
                 self.fluctuations[p] = GaussianDopplerProcess(fl.doppler_spread_hz, k_db, t0_s, t1_s, rng)
 
     def describe(self) -> dict:
+        """Model constants for the sidecar (empty in the base class)."""
         return {}
 
 
 class GeometryModel(ChannelModel):
-    """A still beacon, a moving vehicle, and their images in a flat waveguide (module docstring)."""
+    """A still beacon, a moving vehicle, and their images in a flat waveguide (module docstring).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A ``geometry`` mode scenario.
+    reference_frequency_hz : float
+        Frequency of the absorption and rough-surface losses [Hz], unless the
+        scenario sets ``environment.reference_frequency_hz``.
+
+    Attributes
+    ----------
+    trajectory : Trajectory
+        The vehicle's track.
+    f_ref : float
+        Frequency used for the losses [Hz].
+    images : numpy.ndarray
+        Beacon image positions [m], shape ``(n_paths, 3)``.
+    alpha_db_per_km : float
+        Thorp absorption at ``f_ref`` [dB/km], 0 when absorption is off.
+    normalization : float
+        Gain that makes the direct path's amplitude 1 at the recording's
+        start [linear].
+
+    Raises
+    ------
+    ConfigError
+        The direct path has zero amplitude.
+    """
 
     def __init__(self, scenario: Scenario, *, reference_frequency_hz: float):
         env = scenario.environment
@@ -202,7 +348,24 @@ class GeometryModel(ChannelModel):
 
 
 class ProfileModel(ChannelModel):
-    """Prescribed v_r(t) on a direct path, plus echoes that share it (module docstring)."""
+    """Prescribed v_r(t) on a direct path, plus echoes that share it (module docstring).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A ``profile`` mode scenario.
+
+    Attributes
+    ----------
+    profile : DopplerProfile
+        The closing speed v_r(t).
+    tau0 : float
+        Direct-path delay at t = 0 [s], initial range / c.
+    excess : numpy.ndarray
+        Excess delay of each path [s], shape ``(n_paths,)``, 0 for the direct path.
+    gain : numpy.ndarray
+        Constant amplitude of each path [linear], shape ``(n_paths,)``.
+    """
 
     def __init__(self, scenario: Scenario):
         dop = scenario.doppler
@@ -249,6 +412,23 @@ def build_model(scenario: Scenario, *, reference_frequency_hz: float) -> Channel
     ``reference_frequency_hz``: frequency of the absorption and rough-surface
     losses unless the scenario gives ``environment.reference_frequency_hz``
     (the simulator passes the frame's data carrier).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A ``geometry`` or ``profile`` mode scenario.
+    reference_frequency_hz : float
+        Default frequency of the losses [Hz] (geometry mode only).
+
+    Returns
+    -------
+    ChannelModel
+        A :class:`GeometryModel` or a :class:`ProfileModel`.
+
+    Raises
+    ------
+    ConfigError
+        Any other mode (``replay`` has no path model).
     """
     if scenario.mode == "geometry":
         return GeometryModel(scenario, reference_frequency_hz=reference_frequency_hz)

@@ -29,7 +29,23 @@ __all__ = ["NoiseSource", "WhiteNoise", "AmbientNoise", "GaussianMixtureNoise", 
 
 
 def ambient_psd_db(frequency_hz, *, shipping: float, wind_mps: float) -> np.ndarray:
-    """Ocean ambient noise PSD [dB re 1 µPa²/Hz] (Coates 1990, in Stojanovic 2007 eq 3)."""
+    """Ocean ambient noise PSD [dB re 1 µPa²/Hz] (Coates 1990, in Stojanovic 2007 eq 3).
+
+    Parameters
+    ----------
+    frequency_hz : float or array_like
+        Frequencies [Hz], > 0.
+    shipping : float
+        Shipping activity factor s, 0 (none) to 1 (heavy).
+    wind_mps : float
+        Wind speed w [m/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Sum of the turbulence, shipping, wind and thermal terms
+        [dB re 1 µPa²/Hz], same shape as ``frequency_hz``.
+    """
     f = np.asarray(frequency_hz, dtype=float) / 1e3
     turbulence = 17.0 - 30.0 * np.log10(f)
     ships = 40.0 + 20.0 * (shipping - 0.5) + 26.0 * np.log10(f) - 60.0 * np.log10(f + 0.03)
@@ -39,7 +55,28 @@ def ambient_psd_db(frequency_hz, *, shipping: float, wind_mps: float) -> np.ndar
 
 
 class NoiseSource:
-    """A stream of noise samples of nominal power 1."""
+    """A stream of noise samples of nominal power 1.
+
+    The base class; :class:`WhiteNoise`, :class:`AmbientNoise`,
+    :class:`GaussianMixtureNoise` and :class:`AlphaStableNoise` implement
+    :meth:`block`.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    rng : numpy.random.Generator
+        Source of the random draws; consumed block after block.
+
+    Attributes
+    ----------
+    kind : str
+        Scenario name of the noise type (``"white"``, ``"ambient"``, ...).
+    fs : float
+        Sample rate [Hz].
+    rng : numpy.random.Generator
+        The generator given.
+    """
 
     kind = "white"
 
@@ -48,16 +85,48 @@ class NoiseSource:
         self.rng = rng
 
     def in_band_fraction(self, band_hz: tuple[float, float]) -> float:
-        """Share of the nominal power inside ``band_hz`` (white: 2B/fs)."""
+        """Share of the nominal power inside ``band_hz`` (white: 2B/fs).
+
+        Parameters
+        ----------
+        band_hz : tuple of float
+            Band edges ``(low, high)`` [Hz].
+
+        Returns
+        -------
+        float
+            Fraction of the nominal power 1 inside the band, in [0, 1].
+        """
         lo, hi = band_hz
         return 2.0 * (min(hi, self.fs / 2) - max(lo, 0.0)) / self.fs
 
     def block(self, n: int) -> np.ndarray:
-        """The next ``n`` samples."""
+        """The next ``n`` samples.
+
+        Parameters
+        ----------
+        n : int
+            Number of samples.
+
+        Returns
+        -------
+        numpy.ndarray
+            Real samples, shape ``(n,)``, continuing the previous block.
+        """
         raise NotImplementedError
 
 
 class WhiteNoise(NoiseSource):
+    """White Gaussian noise of variance 1.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    rng : numpy.random.Generator
+        Source of the random draws.
+    """
+
     kind = "white"
 
     def block(self, n):
@@ -65,7 +134,27 @@ class WhiteNoise(NoiseSource):
 
 
 class AmbientNoise(NoiseSource):
-    """Gaussian noise coloured like the ocean's ambient noise (module docstring)."""
+    """Gaussian noise coloured like the ocean's ambient noise (module docstring).
+
+    White noise filtered by an ``N_TAPS``-tap FIR of unit energy whose power
+    response follows :func:`ambient_psd_db` (flat below 100 Hz); variance 1.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    rng : numpy.random.Generator
+        Source of the random draws.
+    shipping : float
+        Shipping activity factor, 0 to 1.
+    wind_mps : float
+        Wind speed [m/s].
+
+    Attributes
+    ----------
+    taps : numpy.ndarray
+        The colouring FIR, shape ``(N_TAPS,)``, unit energy.
+    """
 
     kind = "ambient"
     N_TAPS = 513
@@ -94,6 +183,32 @@ class AmbientNoise(NoiseSource):
 
 
 class GaussianMixtureNoise(NoiseSource):
+    """Impulsive two-term Gaussian mixture noise of variance 1 (snapping shrimp).
+
+    Each sample is N(0, σ²), or with probability ``impulse_probability``
+    N(0, κσ²), κ = ``impulse_power_ratio``; σ² = 1/((1 − p) + pκ).
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    rng : numpy.random.Generator
+        Source of the random draws.
+    impulse_probability : float
+        Probability p that a sample is an impulse, in [0, 1].
+    impulse_power_ratio : float
+        Power ratio κ of an impulse to a background sample [linear].
+
+    Attributes
+    ----------
+    p : float
+        ``impulse_probability``.
+    ratio : float
+        ``impulse_power_ratio``.
+    sigma : float
+        Standard deviation σ of a background sample.
+    """
+
     kind = "gaussian_mixture"
 
     def __init__(self, fs, rng, *, impulse_probability: float, impulse_power_ratio: float):
@@ -108,6 +223,21 @@ class GaussianMixtureNoise(NoiseSource):
 
 
 class AlphaStableNoise(NoiseSource):
+    """Symmetric α-stable noise (Chambers–Mallows–Stuck), dispersion 1/√2.
+
+    Scaled so that α = 2 gives N(0, 1); for α < 2 the variance is infinite.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate [Hz].
+    rng : numpy.random.Generator
+        Source of the random draws.
+    alpha : float
+        Characteristic exponent α in (0, 2]; smaller is more impulsive
+        (1 is Cauchy).
+    """
+
     kind = "alpha_stable"
 
     def __init__(self, fs, rng, *, alpha: float):

@@ -34,26 +34,81 @@ def _finite(name: str, value) -> float:
 
 
 class DopplerProfile:
-    """Base class: ``speed(t)`` [m/s] and ``displacement(t)`` = ∫₀ᵗ v_r [m]."""
+    """Base class: ``speed(t)`` [m/s] and ``displacement(t)`` = ∫₀ᵗ v_r [m].
+
+    Subclasses are frozen dataclasses that also serialize with
+    :meth:`to_dict` (the scenario file's ``doppler.profile`` entry).
+    """
 
     def speed(self, t_s) -> np.ndarray:
+        """Closing speed v_r(t).
+
+        Parameters
+        ----------
+        t_s : float or array_like
+            Times [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            v_r [m/s], positive when closing, same shape as ``t_s``.
+        """
         raise NotImplementedError
 
     def displacement(self, t_s) -> np.ndarray:
+        """Range decrease D(t) = ∫₀ᵗ v_r(u) du, in closed form.
+
+        Parameters
+        ----------
+        t_s : float or array_like
+            Times [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            D(t) [m], same shape as ``t_s``; D(0) = 0.
+        """
         raise NotImplementedError
 
     def max_abs_speed(self, t0_s: float, t1_s: float) -> float:
-        """Largest |v_r| over [t0, t1] (an upper bound for sums)."""
+        """Largest |v_r| over [t0, t1] (an upper bound for sums).
+
+        Parameters
+        ----------
+        t0_s, t1_s : float
+            Interval ends [s].
+
+        Returns
+        -------
+        float
+            max |v_r| [m/s] (the base class samples 4097 points).
+        """
         t = np.linspace(t0_s, t1_s, 4097)
         return float(np.max(np.abs(self.speed(t))))
 
     def to_dict(self) -> dict:
+        """The profile as a JSON-ready dict with a ``"kind"`` key.
+
+        Returns
+        -------
+        dict
+            ``kind`` and the constructor's fields.
+        """
         raise NotImplementedError
 
 
 @dataclass(frozen=True)
 class ConstantProfile(DopplerProfile):
-    """v_r(t) = v_mps."""
+    """v_r(t) = v_mps.
+
+    Attributes
+    ----------
+    v_mps : float
+        Constant closing speed [m/s], positive when closing.
+    label : str, optional
+        Free name of the component (e.g. ``"vehicle"``), kept in
+        :meth:`to_dict`; ``""`` for none.
+    """
 
     v_mps: float
     label: str = ""
@@ -76,7 +131,22 @@ class ConstantProfile(DopplerProfile):
 
 @dataclass(frozen=True)
 class RampProfile(DopplerProfile):
-    """v_r goes linearly from ``v0_mps`` at ``t0_s`` to ``v1_mps`` at ``t1_s``; constant outside."""
+    """v_r goes linearly from ``v0_mps`` at ``t0_s`` to ``v1_mps`` at ``t1_s``; constant outside.
+
+    Attributes
+    ----------
+    v0_mps : float
+        Closing speed up to ``t0_s`` [m/s].
+    v1_mps : float
+        Closing speed from ``t1_s`` on [m/s].
+    t0_s : float
+        Start of the ramp [s].
+    t1_s : float
+        End of the ramp [s], > ``t0_s``.
+    label : str, optional
+        Free name of the component (e.g. ``"vehicle"``), kept in
+        :meth:`to_dict`; ``""`` for none.
+    """
 
     v0_mps: float
     v1_mps: float
@@ -119,7 +189,20 @@ class RampProfile(DopplerProfile):
 
 @dataclass(frozen=True)
 class SinusoidalProfile(DopplerProfile):
-    """Surface-wave motion: v_r(t) = amplitude · sin(2π f t + phase)."""
+    """Surface-wave motion: v_r(t) = amplitude · sin(2π f t + phase).
+
+    Attributes
+    ----------
+    amplitude_mps : float
+        Peak closing speed [m/s].
+    frequency_hz : float
+        Frequency of the motion f [Hz], > 0.
+    phase_rad : float, optional
+        Phase at t = 0 [rad]; 0 starts at v_r = 0, accelerating.
+    label : str, optional
+        Free name of the component (e.g. ``"vehicle"``), kept in
+        :meth:`to_dict`; ``""`` for none.
+    """
 
     amplitude_mps: float
     frequency_hz: float
@@ -154,6 +237,16 @@ class SampledProfile(DopplerProfile):
 
     The integral of the piecewise-linear speed is exact (trapezoids, then a
     quadratic inside the current interval).
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray
+        Sample times [s], shape ``(n_points,)``, strictly increasing, n_points ≥ 2.
+    v_mps : numpy.ndarray
+        Closing speeds at ``t_s`` [m/s], shape ``(n_points,)``.
+    label : str, optional
+        Free name of the component (e.g. ``"vehicle"``), kept in
+        :meth:`to_dict`; ``""`` for none.
     """
 
     t_s: np.ndarray
@@ -199,7 +292,18 @@ class SampledProfile(DopplerProfile):
 
 @dataclass(frozen=True)
 class SumProfile(DopplerProfile):
-    """The sum of several profiles (vehicle + drift + surface, paper 003 §III.C)."""
+    """The sum of several profiles (vehicle + drift + surface, paper 003 §III.C).
+
+    Parameters
+    ----------
+    components : sequence of DopplerProfile
+        The profiles to add.
+
+    Attributes
+    ----------
+    components : tuple of DopplerProfile
+        The profiles, in the order given.
+    """
 
     components: tuple[DopplerProfile, ...]
 

@@ -97,12 +97,37 @@ def spreading_gain(range_m, exponent: float):
 
     ``exponent`` k = 2 is spherical, 1 cylindrical, 1.5 the usual "practical"
     value of shallow-water models; power falls as range^−k.
+
+    Parameters
+    ----------
+    range_m : float or array_like
+        Path length [m], > 0.
+    exponent : float
+        Spreading exponent k.
+
+    Returns
+    -------
+    numpy.ndarray
+        Amplitude factor [linear], same shape as ``range_m``; 1 at 1 m.
     """
     return np.asarray(range_m, dtype=float) ** (-0.5 * exponent)
 
 
 def absorption_gain(range_m, alpha_db_per_km: float):
-    """Amplitude factor of absorption over ``range_m``: 10^(−α·range/20 000)."""
+    """Amplitude factor of absorption over ``range_m``: 10^(−α·range/20 000).
+
+    Parameters
+    ----------
+    range_m : float or array_like
+        Path length [m].
+    alpha_db_per_km : float
+        Absorption coefficient α [dB/km] (e.g. Thorp's at the carrier).
+
+    Returns
+    -------
+    numpy.ndarray
+        Amplitude factor [linear], same shape as ``range_m``.
+    """
     return 10.0 ** (-alpha_db_per_km * np.asarray(range_m, dtype=float) / 20_000.0)
 
 
@@ -112,6 +137,23 @@ def rough_surface_gain(frequency_hz: float, rms_height_m: float, sin_grazing, so
     Returns the amplitude factor exp(−2 (k σ sin θ)²), k = 2π f / c, σ the RMS
     wave height, θ the grazing angle (the Rayleigh roughness parameter
     2 k σ sin θ squared, halved). 1 for a flat surface.
+
+    Parameters
+    ----------
+    frequency_hz : float
+        Acoustic frequency f [Hz].
+    rms_height_m : float
+        RMS wave height σ [m]; 0 is a flat surface.
+    sin_grazing : float or array_like
+        Sine of the grazing angle θ at the surface.
+    sound_speed_mps : float
+        Sound speed c [m/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Amplitude factor per reflection [linear], in (0, 1], same shape as
+        ``sin_grazing``.
     """
     k = 2.0 * np.pi * frequency_hz / sound_speed_mps
     return np.exp(-2.0 * (k * rms_height_m * np.asarray(sin_grazing, dtype=float)) ** 2)

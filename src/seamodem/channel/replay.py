@@ -129,6 +129,17 @@ def _load_v73(path: Path) -> dict[str, Any]:
 def read_replay_channel(path: str | Path) -> ReplayChannel:
     """Read a channel file in the uwa-channels format (module docstring).
 
+    Parameters
+    ----------
+    path : str or Path
+        The MATLAB .mat channel file (v5/v7, or v7.3 with h5py installed).
+
+    Returns
+    -------
+    ReplayChannel
+        The impulse responses and their rates, axes in the order
+        ``(n_time, n_rx, n_delay)``.
+
     Raises
     ------
     InputFileError
@@ -254,6 +265,31 @@ def replay_file(in_wav, scenario: Scenario, out_wav, *, command: str = "", progr
     minutes). The truth list is empty: a measured channel has no known
     absolute delay or speed. Without frames to refer to, the SNR refers to the
     in-band power of the whole noiseless output.
+
+    Parameters
+    ----------
+    in_wav : str or Path
+        Input recording (a ``seamodem tx`` WAV with its sidecar).
+    scenario : Scenario
+        A ``replay`` mode scenario (channel file, receiver, start time, noise).
+    out_wav : str or Path
+        Output WAV; its sidecar is written beside it.
+    command : str, optional
+        Command line recorded in the sidecar's ``channel.command``.
+    progress : bool or None, optional
+        Progress bar; None shows it on a terminal only.
+
+    Returns
+    -------
+    dict
+        The output sidecar as written (``channel`` section, empty ``truth``).
+
+    Raises
+    ------
+    InputFileError
+        Unreadable input, sidecar or channel file.
+    ConfigError
+        An invalid scenario for this recording.
     """
     out_wav = check_writable(out_wav)
     info, side_in, config = read_input(in_wav)

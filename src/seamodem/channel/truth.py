@@ -122,6 +122,20 @@ def in_band_power(x: np.ndarray, fs: float, band_hz: tuple[float, float]) -> flo
     N = len(x) samples. A white noise of variance σ² gives 2σ²B/fs; a tone of
     amplitude A inside the band gives A²/2 (the window's sidelobes keep the
     out-of-band tone's leakage below −80 dB).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Real signal, shape ``(n_samples,)``.
+    fs : float
+        Sample rate [Hz].
+    band_hz : tuple of float
+        Band edges ``(low, high)`` [Hz], both included.
+
+    Returns
+    -------
+    float
+        In-band power [signal units²]; 0 for fewer than 2 samples.
     """
     x = np.asarray(x, dtype=float)
     n = x.size

@@ -122,6 +122,25 @@ class RetimedInput:
     n − (t_out,k − t_in,k)·fs, band-limited (the channel's 32-tap interpolator).
     ``source`` has ``n`` and ``read(lo, hi)`` (as the simulator's inputs);
     this object has the same, so the simulator reads it as its input.
+
+    Parameters
+    ----------
+    source : object
+        The input, with ``n`` (its length in samples) and ``read(lo, hi)``.
+    fs : float
+        Sample rate [Hz].
+    t_in_s : array_like
+        Start of each frame in the input [s], shape ``(n_frames,)``.
+    t_out_s : array_like
+        Emission time of each frame (its reply) [s], shape ``(n_frames,)``.
+    frame_duration_s : float
+        Duration T_F of one frame [s].
+
+    Attributes
+    ----------
+    n : int
+        Length of the emission [samples], up to the last frame's end plus the
+        interpolator's margin.
     """
 
     def __init__(self, source, fs: float, t_in_s, t_out_s, frame_duration_s: float):
@@ -138,6 +157,18 @@ class RetimedInput:
         self.n = int(max(self.b.max(), 1))
 
     def read(self, lo: int, hi: int) -> np.ndarray:
+        """Emission samples ``lo`` to ``hi`` (excluded).
+
+        Parameters
+        ----------
+        lo, hi : int
+            Sample range [samples].
+
+        Returns
+        -------
+        numpy.ndarray
+            Samples, shape ``(hi - lo,)``, zero between frames.
+        """
         out = np.zeros(hi - lo)
         for k in np.flatnonzero((self.a < hi) & (self.b > lo)):
             n_lo, n_hi = max(lo, int(self.a[k])), min(hi, int(self.b[k]))
@@ -162,6 +193,21 @@ def two_way_truth(rows: list[dict], schedule: ReplySchedule, sound_speed_mps: fl
     ``range_poll_m`` (R_out, at the poll) and ``range_reply_m`` (R_back, at the
     reply's reception). ``v_r_mps`` stays the reply's (return path) closing speed;
     ``paths`` stay one-way, from the reply's emission.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One-way truth rows of the replies, one per poll, with
+        ``t_arrival_s`` and ``t_arrival_true_s`` [s].
+    schedule : ReplySchedule
+        Poll and reply times of the same replies.
+    sound_speed_mps : float
+        Sound speed c [m/s].
+
+    Returns
+    -------
+    list of dict
+        ``rows``, updated.
     """
     c = sound_speed_mps
     T = schedule.turnaround_s

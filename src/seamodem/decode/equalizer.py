@@ -39,7 +39,29 @@ __all__ = ["DfeSettings", "DfeResult", "dfe_equalize", "mmse_dfe_taps"]
 
 @dataclass(frozen=True, kw_only=True)
 class DfeSettings:
-    """Equaliser parameters (see the module docstring for guidance)."""
+    """Equaliser parameters (see the module docstring for guidance).
+
+    Attributes
+    ----------
+    sps : int
+        Input samples per symbol of the feedforward filter, ≥ 1.
+    n_ff : int
+        Feedforward taps [samples], ≥ 1.
+    ff_centre : int
+        Anticausal feedforward taps [samples], in [0, n_ff); the tap initialised to 1.
+    n_fb : int
+        Feedback taps [symbols], ≥ 0.
+    algorithm : {"rls", "nlms"}
+        Adaptation algorithm.
+    forgetting : float
+        RLS forgetting factor λ, in (0, 1].
+    step : float
+        NLMS step size μ, in (0, 2).
+    pll_kp, pll_ki : float
+        Proportional and integral gains of the PLL; 0 and 0 disable it.
+    rls_delta : float
+        RLS initialisation: the inverse correlation matrix starts at I/δ.
+    """
 
     sps: int = 2
     n_ff: int = 24

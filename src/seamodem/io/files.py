@@ -15,6 +15,18 @@ __all__ = ["atomic_outputs", "check_writable"]
 def check_writable(path: str | Path, *, parameter: str = "output") -> Path:
     """Fail early, before any work, if ``path`` cannot be written.
 
+    Parameters
+    ----------
+    path : str or Path
+        The output file to be written.
+    parameter : str, optional
+        Name of the option or argument given, for the error message.
+
+    Returns
+    -------
+    Path
+        ``path`` as a :class:`~pathlib.Path`.
+
     Raises
     ------
     SeamodemError
@@ -37,6 +49,17 @@ def atomic_outputs(*paths: str | Path):
 
     On any exception the temporaries are deleted and nothing at ``paths`` changes,
     so a failed run never leaves a partial file that looks valid.
+
+    Parameters
+    ----------
+    *paths : str or Path
+        The final output files; their folders must exist.
+
+    Yields
+    ------
+    list of Path
+        One temporary file per path (``.<name>.*.part`` in the same folder),
+        to be written inside the ``with`` block.
     """
     finals = [Path(p) for p in paths]
     temps = []

@@ -36,16 +36,47 @@ SIDECAR_FORMAT = "seamodem.sidecar/1"
 
 
 def sidecar_path(wav_path: str | Path) -> Path:
-    """The sidecar that belongs to ``wav_path``: same name, ``.json`` suffix."""
+    """The sidecar that belongs to ``wav_path``: same name, ``.json`` suffix.
+
+    Parameters
+    ----------
+    wav_path : str or Path
+        A recording.
+
+    Returns
+    -------
+    Path
+        ``wav_path`` with its suffix replaced by ``.json``.
+    """
     return Path(wav_path).with_suffix(".json")
 
 
 def write_json(path: str | Path, data: dict[str, Any]) -> None:
+    """Write ``data`` as indented UTF-8 JSON, ending in a newline.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file, overwritten.
+    data : dict
+        JSON-serializable mapping (e.g. a sidecar).
+    """
     Path(path).write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
 
 
 def read_sidecar(path: str | Path) -> dict[str, Any]:
     """Read and check a sidecar.
+
+    Parameters
+    ----------
+    path : str or Path
+        The sidecar JSON file (see :func:`sidecar_path`).
+
+    Returns
+    -------
+    dict
+        The sidecar, with its ``format`` checked and its ``config``,
+        ``pilot``, ``schedule``, ``recording`` and ``frames`` sections present.
 
     Raises
     ------

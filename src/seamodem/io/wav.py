@@ -30,6 +30,23 @@ def write_wav_blocks(path: str | Path, blocks: Iterable[np.ndarray], *, fs: int,
 
     ``subtype`` is a soundfile subtype (``"FLOAT"``, ``"PCM_16"``, ``"PCM_24"``);
     PCM values are clipped by soundfile at ±1 full scale.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output WAV file, overwritten.
+    blocks : iterable of numpy.ndarray
+        Consecutive real sample blocks, each of shape ``(n_block,)``, full
+        scale ±1.
+    fs : int
+        Sample rate [Hz].
+    subtype : str, optional
+        Sample format; default 32-bit float.
+
+    Returns
+    -------
+    int
+        Number of samples written.
     """
     import numpy as np
     import soundfile
@@ -123,6 +140,22 @@ def wav_info(path: str | Path) -> AudioInfo:
     or crashed recorder, or more bytes than the file holds) is read as far as
     its samples go; :attr:`AudioInfo.note` says so, and a
     :class:`RecordingWarning` carries it.
+
+    Parameters
+    ----------
+    path : str or Path
+        An audio file readable by soundfile (WAV, FLAC, ...).
+
+    Returns
+    -------
+    AudioInfo
+        Sample rate, channels, the samples present and, for a lying header,
+        the data offset and a note.
+
+    Raises
+    ------
+    InputFileError
+        Missing, empty, or unreadable file.
     """
     import soundfile
 

@@ -64,7 +64,20 @@ def kalman_update(
 
 
 def nees(error: np.ndarray, P: np.ndarray) -> float:
-    """Normalized estimation error squared eᵀ P⁻¹ e (χ²(n) for a consistent filter)."""
+    """Normalized estimation error squared eᵀ P⁻¹ e (χ²(n) for a consistent filter).
+
+    Parameters
+    ----------
+    error : numpy.ndarray, shape (n,)
+        Estimate minus truth, in the state's units.
+    P : numpy.ndarray, shape (n, n)
+        The filter's covariance of that estimate.
+
+    Returns
+    -------
+    float
+        eᵀ P⁻¹ e (dimensionless).
+    """
     return float(error @ np.linalg.solve(P, error))
 
 

@@ -37,6 +37,18 @@ class CoordinateWarning(UserWarning):
 def slant_to_horizontal(slant_m, depth_vehicle_m, depth_beacon_m) -> np.ndarray:
     """Horizontal range from a slant range and the two known depths [m].
 
+    Parameters
+    ----------
+    slant_m : float or array_like
+        Slant (3-D) range d_3D [m].
+    depth_vehicle_m, depth_beacon_m : float or array_like
+        Depths z_R and z_B [m], both with the same sign convention.
+
+    Returns
+    -------
+    numpy.ndarray
+        Horizontal range d_2D ≥ 0 [m]; the inputs' broadcast shape.
+
     Notes
     -----
     d_2D = √(d_3D² − (z_R − z_B)²) (paper 004 eq 10; paper 001 eq 53 inverted).

@@ -31,6 +31,22 @@ __all__ = [
 def closing_speed(x, y, psi, v, beacon_xy) -> np.ndarray:
     """Radial closing speed of a vehicle moving at speed ``v`` along heading ``psi`` [m/s].
 
+    Parameters
+    ----------
+    x, y : float or array_like
+        Vehicle position [m] (x east, y north).
+    psi : float or array_like
+        Heading ψ [rad], counter-clockwise from the x axis.
+    v : float or array_like
+        Speed over ground [m/s].
+    beacon_xy : array_like, shape (2,)
+        Beacon position (x_ref, y_ref) [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        v_r [m/s], positive when closing; the inputs' broadcast shape.
+
     Notes
     -----
     v_r = −v·cos(atan2(y − y_ref, x − x_ref) − ψ) (paper 000 eq 13–15 and the second
@@ -152,6 +168,18 @@ class Auv6Model(_PlanarModel):
 class Auv4Model(_PlanarModel):
     """Paper 002's 4-state model z = (x, y, θ_h, v_p).
 
+    Parameters
+    ----------
+    beacon_xy : array_like, shape (2,)
+        Beacon position (x_ref, y_ref) [m].
+
+    Attributes
+    ----------
+    n : int
+        State dimension, 4: x, y [m], heading θ_h [rad], speed v_p [m/s].
+    kinds : dict
+        Measurement kind → its components, in order.
+
     Notes
     -----
     Transition eq 4 with Jacobian eq 8 (constant heading and speed between
@@ -181,6 +209,18 @@ class Auv4Model(_PlanarModel):
 
 class Auv3Model(_PlanarModel):
     """Paper 003's 3-state model z = (x, y, v); the heading θ_h (compass) is the input ``u``.
+
+    Parameters
+    ----------
+    beacon_xy : array_like, shape (2,)
+        Beacon position (x_ref, y_ref) [m].
+
+    Attributes
+    ----------
+    n : int
+        State dimension, 3: x, y [m], speed v [m/s].
+    kinds : dict
+        Measurement kind → its components, in order.
 
     Notes
     -----

@@ -102,6 +102,30 @@ def boustrophedon(
 ) -> SegmentPath:
     """Lawn-mower survey: ``n_lanes`` lanes along y joined by half circles.
 
+    Parameters
+    ----------
+    width_m : float
+        x of the last lane [m] (the first is at x = 0); lane spacing
+        ``width_m / (n_lanes - 1)``, turn radius half of it.
+    lane_length_m : float
+        Length of a straight lane [m].
+    n_lanes : int
+        Number of lanes, ≥ 2.
+    y0_m : float
+        y where the lanes start [m].
+    speed_mps : float
+        Constant speed along the path [m/s].
+
+    Returns
+    -------
+    SegmentPath
+        Lines and arcs, starting at (0, ``y0_m``) heading +y.
+
+    Raises
+    ------
+    ConfigError
+        ``n_lanes`` below 2.
+
     Notes
     -----
     Defaults reproduce paper 000 Table 2 as closely as the text allows: lanes from
@@ -129,7 +153,25 @@ def boustrophedon(
 
 
 def waypoint_path(waypoints_xy, speed_mps: float) -> SegmentPath:
-    """Straight legs through ``waypoints_xy`` (shape (n, 2), n >= 2) at constant speed."""
+    """Straight legs through ``waypoints_xy`` (shape (n, 2), n >= 2) at constant speed.
+
+    Parameters
+    ----------
+    waypoints_xy : array_like, shape (n_waypoints, 2)
+        Waypoints (x, y) [m], n_waypoints ≥ 2.
+    speed_mps : float
+        Speed along every leg [m/s].
+
+    Returns
+    -------
+    SegmentPath
+        One line segment per leg.
+
+    Raises
+    ------
+    ConfigError
+        Wrong shape or fewer than two waypoints.
+    """
     points = np.asarray(waypoints_xy, dtype=float)
     if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2:
         raise ConfigError("waypoints_xy", f"must have shape (n >= 2, 2), got {points.shape}")

@@ -85,7 +85,20 @@ class BeaconSchedule:
 
 
 def payloads_from_text(text: str, count: int) -> list[bytes]:
-    """One UTF-8 payload per frame; ``{index}`` in ``text`` becomes the frame index."""
+    """One UTF-8 payload per frame; ``{index}`` in ``text`` becomes the frame index.
+
+    Parameters
+    ----------
+    text : str
+        The message, optionally with ``{index}``.
+    count : int
+        Number of frames.
+
+    Returns
+    -------
+    list of bytes
+        ``count`` payloads (their length is checked when frames are built).
+    """
     return [text.replace("{index}", str(k)).encode("utf-8") for k in range(count)]
 
 
@@ -94,6 +107,25 @@ def payloads_from_bytes(data: bytes, capacity: int, count: int | None = None) ->
 
     With ``count`` given, frames after the end of the data carry empty payloads;
     data that does not fit into ``count`` frames is an error.
+
+    Parameters
+    ----------
+    data : bytes
+        The data to send (e.g. a file's contents).
+    capacity : int
+        Payload capacity of one frame [bytes] (``config.capacity_bytes``).
+    count : int or None, optional
+        Number of frames; None uses as many as the data needs (at least 1).
+
+    Returns
+    -------
+    list of bytes
+        ``count`` payloads.
+
+    Raises
+    ------
+    PayloadError
+        The data needs more than ``count`` frames.
     """
     needed = max(1, math.ceil(len(data) / capacity))
     if count is None:
@@ -107,7 +139,25 @@ def payloads_from_bytes(data: bytes, capacity: int, count: int | None = None) ->
 
 @dataclass(frozen=True, eq=False)
 class BeaconSignal:
-    """A rendered beacon recording: frames, where they start, and how long it is."""
+    """A rendered beacon recording: frames, where they start, and how long it is.
+
+    Built by :func:`render_beacon`.
+
+    Attributes
+    ----------
+    config : FrameConfig
+        The frame configuration.
+    schedule : BeaconSchedule
+        Emission times of the frames.
+    frames : tuple of Frame
+        The encoded frames, in emission order.
+    first_samples : numpy.ndarray, shape (n_frames,)
+        Recording index of each frame's first sample.
+    offsets_s : numpy.ndarray, shape (n_frames,)
+        Time from each frame's emission to that sample [s], in [0, 1/fs).
+    n_samples : int
+        Length of the recording [samples].
+    """
 
     config: FrameConfig
     schedule: BeaconSchedule
@@ -117,6 +167,7 @@ class BeaconSignal:
     n_samples: int
 
     def frame_samples(self, k: int) -> np.ndarray:
+        """Waveform of frame ``k`` on the recording's sample grid, model units."""
         return frame_waveform(self.frames[k], offset_s=float(self.offsets_s[k]))
 
     def peak(self) -> float:
@@ -124,7 +175,22 @@ class BeaconSignal:
         return max(float(np.max(np.abs(self.frame_samples(k)))) for k in range(len(self.frames)))
 
     def blocks(self, *, scale: float = 1.0, block_size: int = 1 << 20, progress: bool | None = None) -> Iterator[np.ndarray]:
-        """The recording, ``scale``·s(t), as consecutive float64 blocks (bounded memory)."""
+        """The recording, ``scale``·s(t), as consecutive float64 blocks (bounded memory).
+
+        Parameters
+        ----------
+        scale : float, optional
+            Gain from model units to full scale.
+        block_size : int, optional
+            Samples per block (the last may be shorter).
+        progress : bool or None, optional
+            Progress bar; None shows it on a terminal only.
+
+        Yields
+        ------
+        numpy.ndarray, shape (block_size,)
+            Consecutive samples; together ``n_samples`` long.
+        """
         starts = self.first_samples
         lengths = np.array([frame_sample_count(self.config, o) for o in self.offsets_s])
         k = 0
@@ -280,7 +346,24 @@ def write_beacon(
 
 
 def rebuild_from_sidecar(sidecar: dict[str, Any]) -> np.ndarray:
-    """Rebuild the recording's samples (float64, before the WAV's sample format) from a sidecar alone."""
+    """Rebuild the recording's samples (float64, before the WAV's sample format) from a sidecar alone.
+
+    Parameters
+    ----------
+    sidecar : dict
+        A ``seamodem tx`` sidecar (see :func:`seamodem.io.read_sidecar`) that
+        records the payloads and pilot bits.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_samples,)
+        The recording, scaled by the sidecar's ``recording.scale``.
+
+    Raises
+    ------
+    InputFileError
+        The sidecar lacks the payloads or the pilot bits.
+    """
     config = FrameConfig.from_dict(sidecar["config"])
     schedule = BeaconSchedule(**sidecar["schedule"])
     payloads, bits = sidecar_payloads(sidecar), sidecar_pilot_bits(sidecar)

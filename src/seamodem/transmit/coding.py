@@ -59,7 +59,18 @@ _CRC16_TABLE = _crc16_table()
 
 
 def crc16_ccitt(data: bytes) -> int:
-    """CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF); check value 0x29B1 for b"123456789"."""
+    """CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF); check value 0x29B1 for b"123456789".
+
+    Parameters
+    ----------
+    data : bytes
+        The message.
+
+    Returns
+    -------
+    int
+        The CRC, in [0, 0xFFFF].
+    """
     c = 0xFFFF
     for byte in data:
         c = ((c << 8) & 0xFFFF) ^ int(_CRC16_TABLE[((c >> 8) ^ byte) & 0xFF])
@@ -154,6 +165,20 @@ def parse_info_block(bits: np.ndarray, config: FrameConfig) -> tuple[bytes, bool
 
     The payload is returned even when the CRC fails (for inspection); its
     length field is clipped to the capacity.
+
+    Parameters
+    ----------
+    bits : array_like of {0, 1}, shape (n_info_bits,)
+        Decoded information bits (more are ignored).
+    config : FrameConfig
+        The frame configuration (capacity, CRC, FEC, data length).
+
+    Returns
+    -------
+    payload : bytes
+        The payload, at most ``config.capacity_bytes`` long.
+    crc_ok : bool
+        Whether the CRC matches.
     """
     n_body = LENGTH_HEADER_BYTES + config.capacity_bytes
     n_crc = CRC_SCHEMES[config.crc]
@@ -165,7 +190,25 @@ def parse_info_block(bits: np.ndarray, config: FrameConfig) -> tuple[bytes, bool
 
 
 def encode_payload(payload: bytes, config: FrameConfig) -> np.ndarray:
-    """The ``config.n_coded_bits`` bits that the data symbols carry."""
+    """The ``config.n_coded_bits`` bits that the data symbols carry.
+
+    Parameters
+    ----------
+    payload : bytes
+        At most ``config.capacity_bytes`` bytes.
+    config : FrameConfig
+        The frame configuration (capacity, CRC, FEC, data length).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_coded_bits,), uint8
+        Length, payload, padding and CRC, coded, interleaved and scrambled.
+
+    Raises
+    ------
+    PayloadError
+        The payload exceeds the capacity.
+    """
     return encode_info(info_block(payload, config), config)
 
 
@@ -183,6 +226,18 @@ def code_order_llr(llr_air: np.ndarray, config: FrameConfig) -> np.ndarray:
     """Undo the scrambler (sign flips) and the interleaver on LLRs in on-air order.
 
     L = log P(b = 0)/P(b = 1); for hard bits pass 1 − 2·bits and read the sign.
+
+    Parameters
+    ----------
+    llr_air : array_like, shape (n_coded_bits,)
+        LLRs in the order the bits were sent (more are ignored).
+    config : FrameConfig
+        The frame configuration (capacity, CRC, FEC, data length).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_coded_bits,)
+        LLRs in the coder's output order, ready for the Viterbi decoder.
     """
     n = config.n_coded_bits
     llr = np.asarray(llr_air, dtype=float)[:n] * (1.0 - 2.0 * pn9_sequence(n))

@@ -92,12 +92,37 @@ def build_frame(config: FrameConfig, payload: bytes = b"", *, pilot_bits: np.nda
 
 
 def frame_symbol_times(config: FrameConfig) -> np.ndarray:
-    """Pulse centre of each pilot and data symbol after the frame start, (Ng + k)·T [s]."""
+    """Pulse centre of each pilot and data symbol after the frame start, (Ng + k)·T [s].
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The frame configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_pilot + n_data,)
+        Times [s], pilot symbols first.
+    """
     return (config.n_guard + np.arange(config.n_pilot + config.n_data)) * config.symbol_period_s
 
 
 def frame_sample_count(config: FrameConfig, offset_s: float = 0.0) -> int:
-    """Samples m ≥ 0 with τ_m = offset + m/fs inside [0, T_F)."""
+    """Samples m ≥ 0 with τ_m = offset + m/fs inside [0, T_F).
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The frame configuration.
+    offset_s : float, optional
+        Time from the frame start to its first sample [s], in [0, 1/fs);
+        default 0.
+
+    Returns
+    -------
+    int
+        Number of samples of the frame's waveform.
+    """
     return int(np.ceil((config.frame_duration_s - offset_s) * config.sample_rate_hz - 1e-9))
 
 

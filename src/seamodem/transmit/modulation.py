@@ -19,6 +19,16 @@ def constellation(modulation: str) -> np.ndarray:
     BPSK: 0 → +1, 1 → −1. QPSK: first bit on the real axis, second on the
     imaginary, 0 → +, scaled by 1/√2 (Gray). 8PSK: point at angle 2π p/8
     carries label gray(p).
+
+    Parameters
+    ----------
+    modulation : {"bpsk", "qpsk", "8psk"}
+        The PSK alphabet, M = 2, 4 or 8.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,), complex
+        ``points[label]`` is the symbol that carries ``label``.
     """
     bps = MODULATIONS[modulation]
     m = 1 << bps
@@ -34,7 +44,25 @@ def constellation(modulation: str) -> np.ndarray:
 
 
 def bits_to_symbols(bits: np.ndarray, modulation: str) -> np.ndarray:
-    """Map bits (length a multiple of log2 M, MSB first) to PSK symbols."""
+    """Map bits (length a multiple of log2 M, MSB first) to PSK symbols.
+
+    Parameters
+    ----------
+    bits : array_like of {0, 1}, shape (n_bits,)
+        Bits, ``n_bits`` a multiple of log2 M.
+    modulation : {"bpsk", "qpsk", "8psk"}
+        The PSK alphabet, M = 2, 4 or 8.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_bits / log2 M,), complex
+        Unit-energy symbols.
+
+    Raises
+    ------
+    ValueError
+        ``n_bits`` not a multiple of log2 M.
+    """
     bps = MODULATIONS[modulation]
     bits = np.asarray(bits, dtype=np.int64)
     if bits.size % bps:
@@ -45,7 +73,20 @@ def bits_to_symbols(bits: np.ndarray, modulation: str) -> np.ndarray:
 
 
 def symbols_to_bits(symbols: np.ndarray, modulation: str) -> np.ndarray:
-    """Hard decision: nearest constellation point's bit label (MSB first)."""
+    """Hard decision: nearest constellation point's bit label (MSB first).
+
+    Parameters
+    ----------
+    symbols : array_like, shape (n_symbols,), complex
+        Received symbols, on the unit-energy scale.
+    modulation : {"bpsk", "qpsk", "8psk"}
+        The PSK alphabet, M = 2, 4 or 8.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_symbols · log2 M,), uint8
+        Bits.
+    """
     bps = MODULATIONS[modulation]
     points = constellation(modulation)
     labels = np.argmin(np.abs(np.asarray(symbols)[:, None] - points[None, :]), axis=1)

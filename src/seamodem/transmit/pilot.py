@@ -78,10 +78,37 @@ def _search(n: int, seed: int) -> bytes:
 
 
 def pilot_bits(n_pilot: int, seed: int) -> np.ndarray:
-    """Bits (0 → +1, 1 → −1) of the ``n_pilot``-symbol pilot for ``seed``."""
+    """Bits (0 → +1, 1 → −1) of the ``n_pilot``-symbol pilot for ``seed``.
+
+    Parameters
+    ----------
+    n_pilot : int
+        Pilot length [symbols].
+    seed : int
+        Pilot seed (``FrameConfig.pilot_seed``); the same seed always gives
+        the same pilot.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_pilot,), uint8
+        The pilot's bits.
+    """
     return np.frombuffer(_search(int(n_pilot), int(seed)), dtype=np.uint8).copy()
 
 
 def pilot_symbols(n_pilot: int, seed: int) -> np.ndarray:
-    """BPSK pilot symbols (±1, complex) of length ``n_pilot``."""
+    """BPSK pilot symbols (±1, complex) of length ``n_pilot``.
+
+    Parameters
+    ----------
+    n_pilot : int
+        Pilot length [symbols].
+    seed : int
+        Pilot seed (see :func:`pilot_bits`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_pilot,), complex
+        1 − 2·:func:`pilot_bits`.
+    """
     return (1.0 - 2.0 * pilot_bits(n_pilot, seed)).astype(complex)
