@@ -5,7 +5,8 @@ Modules follow the physics: ``propagation`` (sound speed, absorption, losses),
 ``model`` (each path's delay and gain over time), ``fluctuation`` (random path
 gains with a Doppler spread), ``noise``, ``resample`` (the band-limited
 interpolation kernel), ``truth`` (ground truth per frame), ``scenario`` (TOML
-files), ``simulate`` (the block-wise pipeline) and ``replay`` (measured
+files; its tables in ``scenario_sections``), ``simulate`` (the block-wise pipeline;
+``render`` its two passes, ``files`` its input and output files) and ``replay`` (measured
 channels in the uwa-channels format), ``two_way`` (poll/reply exchanges for
 two-way ranging).
 """

@@ -409,7 +409,7 @@ def simulate_array(
     them, are common to all elements (they are centimetres apart).
     """
     from .model import build_model
-    from .simulate import ArrayInput, ArrayScratch, make_noise_source, render_channel
+    from .render import ArrayInput, ArrayScratch, make_noise_source, render_channel
     from .truth import frame_truth, in_band_power
 
     if scenario.mode != "geometry":
@@ -498,7 +498,7 @@ def simulate_array_file(in_wav, scenario, array: ReceiverArray, out_wav, *, comm
 
     from ..io.files import atomic_outputs, check_writable
     from ..io.sidecar import sidecar_path, write_json
-    from .simulate import OUTPUT_PEAK, OUTPUT_PEAK_LIMIT, read_input
+    from .files import OUTPUT_PEAK, OUTPUT_PEAK_LIMIT, read_input
 
     out_wav = check_writable(out_wav)
     info, side_in, config = read_input(in_wav)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -24,6 +24,8 @@ __all__ = [
     "SinusoidalProfile",
     "SampledProfile",
     "SumProfile",
+    "PROFILE_KINDS",
+    "profile_from_table",
 ]
 
 
@@ -321,3 +323,51 @@ class SumProfile(DopplerProfile):
 
     def to_dict(self):
         return {"kind": "sum", "components": [p.to_dict() for p in self.components]}
+
+
+#: [doppler] component kind → (profile class, its keys)
+PROFILE_KINDS = {
+    "constant": (ConstantProfile, ("v_mps",)),
+    "ramp": (RampProfile, ("v0_mps", "v1_mps", "t0_s", "t1_s")),
+    "sinusoid": (SinusoidalProfile, ("amplitude_mps", "frequency_hz", "phase_rad")),
+    "sampled": (SampledProfile, ("t_s", "v_mps")),
+}
+
+
+def profile_from_table(i: int, table: Any) -> DopplerProfile:
+    """One component of a scenario's [doppler] table as its profile.
+
+    Parameters
+    ----------
+    i : int
+        The component's index, for the error messages (``doppler.components[i].key``).
+    table : dict
+        ``kind`` (a key of :data:`PROFILE_KINDS`), an optional ``label``, and that kind's keys.
+
+    Returns
+    -------
+    DopplerProfile
+        The profile.
+
+    Raises
+    ------
+    ConfigError
+        Not a table, an unknown kind or key, a missing key, an invalid value.
+    """
+    where = f"doppler.components[{i}]"
+    if not isinstance(table, dict):
+        raise ConfigError(where, f"must be a table, got {table!r}")
+    kind = table.get("kind")
+    if kind not in PROFILE_KINDS:
+        raise ConfigError(f"{where}.kind", f"must be one of {', '.join(PROFILE_KINDS)}, got {kind!r}")
+    cls, keys = PROFILE_KINDS[kind]
+    for key in table:
+        if key not in ("kind", "label", *keys):
+            raise ConfigError(f"{where}.{key}", f"unknown scenario key for kind {kind!r} (known: kind, label, {', '.join(keys)})")
+    args = {k: v for k, v in table.items() if k != "kind"}
+    try:
+        return cls(**args)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}.{exc.parameter}", str(exc).split(": ", 1)[1]) from None
+    except TypeError as exc:
+        raise ConfigError(where, f"missing a key for kind {kind!r} (needs {', '.join(keys)}): {exc}") from None

@@ -39,7 +39,8 @@ from scipy.interpolate import CubicSpline
 from ..errors import ConfigError, InputFileError
 from ..io.files import check_writable
 from .scenario import Scenario
-from .simulate import ArrayScratch, noise_pass, read_input, write_outputs
+from .files import read_input, write_outputs
+from .render import ArrayScratch, noise_pass
 
 __all__ = ["ReplayChannel", "read_replay_channel", "replay", "replay_file"]
 

@@ -7,7 +7,8 @@
 - :mod:`.particle`: paper 001's particle filter; :mod:`.multilateration`: paper
   004's sequential anchor EKF and linear least squares;
 - :mod:`.trajectories`, :mod:`.vehicle`, :mod:`.geometry`: simulation pieces;
-- :mod:`.montecarlo`: the reproduction of paper 000 Tables 3–4;
+- :mod:`.mission_config`, :mod:`.missions`: the simulated missions of paper 000 §4.1;
+  :mod:`.montecarlo`: their Monte Carlo reproduction of paper 000 Tables 3–4;
 - :mod:`.track`: tracking from measurement and IMU files (``seamodem nav track``).
 """
 

@@ -42,7 +42,7 @@ class InertialMission(NamedTuple):
     start_offsets : ndarray, shape (4,)
         Filter start minus true start in x, y [m] and speed [m/s], and the true initial heading bias [rad].
     sigmas : ndarray, shape (6,)
-        Sensor noise standard deviations per step (:meth:`~seamodem.navigation.montecarlo.NoiseModel.sigmas`).
+        Sensor noise standard deviations per step (:meth:`~seamodem.navigation.mission_config.NoiseModel.sigmas`).
     dt : float
         IMU step [s].
     com_every : int

@@ -3,7 +3,7 @@
 One call runs one whole mission (≈ 6 200 steps); it is sequential by nature,
 hence numba. The IMU/AHRS readings are :mod:`.imu`'s model (the demo's and the
 reference's too). The pure-Python form of the same loop is
-:func:`seamodem.navigation.montecarlo.simulate_mission_reference`, built from
+:func:`seamodem.navigation.missions.simulate_mission_reference`, built from
 :class:`~seamodem.navigation.ekf.ExtendedKalmanFilter` and
 :class:`~seamodem.navigation.models.Auv6Model`; the tests hold the two equal.
 """

@@ -2,7 +2,7 @@
 
 One model for every simulation of the package: paper 000's Monte Carlo kernel
 (:func:`~seamodem.navigation._kernels.mission_kernel`), its pure-Python
-reference (:func:`~seamodem.navigation.montecarlo.simulate_mission_reference`)
+reference (:func:`~seamodem.navigation.missions.simulate_mission_reference`)
 and the mission demo (:func:`seamodem.demo.simulate_vehicle`) all call
 :func:`bias_step` and :func:`imu_reading`, the kernel from compiled code, the
 others through :func:`simulate_imu` or directly.

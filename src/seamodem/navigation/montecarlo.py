@@ -1,13 +1,16 @@
 """Monte Carlo reproduction of paper 000 §4.1 (Tables 3 and 4): proposed EKF versus ROSB.
 
-Each run simulates a whole boustrophedon mission: the vehicle follows the path
-with the feedback-linearization controller (eq 2), the IMU/AHRS and the acoustic
-frames are emulated from the true geometry with the noise of :class:`NoiseModel`,
-and the 6-state EKF (eq 5–7, 18–25) estimates the position. Runs are
+Each run simulates a whole boustrophedon mission (:mod:`.mission_config`, :mod:`.missions`): the vehicle
+follows the path with the feedback-linearization controller (eq 2), the IMU/AHRS
+and the acoustic frames are emulated from the true geometry with the noise of
+:class:`NoiseModel`, and the 6-state EKF (eq 5–7, 18–25) estimates the
+position. This module runs the missions and tabulates them. Runs are
 independent, seeded by (seed, run index) — the same noise for every T_com and
 both filters (common random numbers), so differences between rows and filters
 are not sampling noise — and spread over all local cores (the compiled kernel
 releases the GIL, so threads suffice).
+
+The names of :mod:`.mission_config` and :mod:`.missions` are re-exported here, where they were defined before.
 """
 
 from __future__ import annotations
@@ -15,20 +18,21 @@ from __future__ import annotations
 import math
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import ConfigError
-from ._kernels import NOISE_COLUMNS, mission_kernel
-from .ekf import ExtendedKalmanFilter
-from .imu import bias_step, imu_reading, imu_sigmas
-from .inertial import InertialConfig
-from .models import Auv6Model, closing_speed
-from .paper import EQ25_ORDER, EQ25_R, EQ25_R_DIAG, eq25_q
-from .ekf_smoother import rts_smooth
-from .trajectories import boustrophedon
-from .vehicle import feedback_command, vehicle_step
+# re-exported: the mission settings and simulators were defined here before the split
+from .mission_config import ALL_FILTERS, BIAS_MODELS, ERROR_OF, FILTERS, INERTIAL_FILTERS, MissionConfig, NoiseModel  # noqa: F401
+from .missions import (  # noqa: F401
+    held_fix_index,
+    mission_noise,
+    simulate_inertial_mission,
+    simulate_mission,
+    simulate_mission_reference,
+)
+from .paper import EQ25_R
 
 __all__ = [
     "NoiseModel",
@@ -49,22 +53,6 @@ __all__ = [
     "format_table",
 ]
 
-#: Filters of the reproduction: the paper's proposal (range + v_r) and the ROSB baseline (range only).
-FILTERS = ("proposed", "rosb")
-
-#: The inertial filter (:mod:`.inertial`) with range and v_r, with range only, and its two smoothers
-#: (:mod:`.inertial.smoothers`, post-processing of the "inertial" mission: the vehicle steers on the filter).
-INERTIAL_FILTERS = ("inertial", "inertial_range", "fixed_lag", "batch")
-
-#: Every estimator :func:`run_monte_carlo` can run, in table order.
-ALL_FILTERS = FILTERS + INERTIAL_FILTERS
-
-#: How the heading-sensor bias evolves in the simulation (:attr:`NoiseModel.heading_bias_model`).
-BIAS_MODELS = ("random_walk", "drift")
-
-#: What the position error is measured on (:attr:`MissionConfig.error_of`).
-ERROR_OF = ("estimate", "smoothed", "last_fix")
-
 #: Paper 000 Tables 3 and 4: T_com → (mean error [m], outliers, variance [m²], %etd max, %etd mean,
 #: ROSB mean error [m], ROSB outliers).
 PAPER_TABLE = {
@@ -75,421 +63,6 @@ PAPER_TABLE = {
     15.0: (9.5457, 6, 18.3823, 1.3950, 0.5966, 10.6684, 10),
     20.0: (12.1322, 6, 33.9161, 1.7825, 0.7583, 12.9695, 29),
 }
-
-
-@dataclass(frozen=True, kw_only=True)
-class NoiseModel:
-    """Standard deviations of the emulated measurements.
-
-    Defaults are the square roots of the filter's R (paper 000 eq 25, :data:`.paper.EQ25_R`), i.e. a
-    filter that is told the truth about its sensors, and the AHRS figures of
-    paper 000 §3.5.3 (1° white heading noise, 5°/h bias instability). The paper
-    shows its noises only as box plots (Fig. 6); these are our stated choice.
-
-    Parameters
-    ----------
-    sigma_range_m : float
-        Range noise [m] (√12 = 3.46 m).
-    sigma_vr_mps : float
-        Closing-speed noise [m/s] (√0.2 = 0.447 m/s).
-    sigma_heading_deg : float
-        White heading noise [deg].
-    heading_drift_deg_per_h : float
-        Heading bias random walk: its standard deviation after one hour [deg].
-    sigma_omega_rad_s : float
-        Gyro white noise [rad/s] (√0.005 = 0.0707, inside the paper's ±0.1 s⁻¹).
-    sigma_accel_mps2 : float
-        Accelerometer white noise [m/s²] (√0.005, inside the paper's ±0.1 m/s²).
-    sigma_bearing_deg : float
-        The beacon's body-frame azimuth from a hydrophone array on the vehicle (issue 17), one per frame [deg];
-        0 (default): no array. The inertial filters and smoothers then use it; the paper's filters do not.
-    heading_bias_model : {"random_walk", "drift"}
-        How ``heading_drift_deg_per_h`` is read. ``"random_walk"`` (the reproduction's choice so far): a
-        random walk whose standard deviation is that value after one hour. ``"drift"``: a bias that drifts
-        at a constant rate, drawn once per run from N(0, (that value per hour)²) — how a datasheet's
-        "bias instability 5°/h" behaves over a mission. The random walk wanders ≈ 0.8° per 100 s, the drift
-        0.14°: docs/navigation.md shows what that difference does to a single-beacon fix.
-    """
-
-    sigma_range_m: float = math.sqrt(EQ25_R["range"])
-    sigma_vr_mps: float = math.sqrt(EQ25_R["v_r"])
-    sigma_heading_deg: float = 1.0
-    heading_drift_deg_per_h: float = 5.0
-    sigma_omega_rad_s: float = math.sqrt(EQ25_R["omega"])
-    sigma_accel_mps2: float = math.sqrt(EQ25_R["a"])
-    sigma_bearing_deg: float = 0.0
-    heading_bias_model: str = "random_walk"
-
-    def __post_init__(self):
-        if self.heading_bias_model not in BIAS_MODELS:
-            raise ConfigError("heading_bias_model", f"must be one of {BIAS_MODELS}, got {self.heading_bias_model!r}")
-        for name in self.__dataclass_fields__:
-            if name == "heading_bias_model":
-                continue
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ConfigError(name, f"must be finite and >= 0, got {value!r}")
-
-    def sigmas(self, dt_s: float) -> np.ndarray:
-        """Per-step standard deviations in :data:`NOISE_COLUMNS` order (SI units): the IMU's
-        (:func:`.imu.imu_sigmas`), then range and v_r."""
-        imu = imu_sigmas(sigma_heading_deg=self.sigma_heading_deg, heading_drift_deg_per_h=self.heading_drift_deg_per_h,
-                         sigma_omega_rad_s=self.sigma_omega_rad_s, sigma_accel_mps2=self.sigma_accel_mps2, dt_s=dt_s,
-                         bias_random_walk=self.heading_bias_model == "random_walk")
-        return np.r_[imu, self.sigma_range_m, self.sigma_vr_mps]
-
-    def bias_rate(self, noise: np.ndarray) -> float:
-        """The run's heading-bias drift rate [rad/s]: 0 for the random walk, else drawn from ``noise[0, 3]``.
-
-        Row 0 of a mission's normals is not used by the paper's kernel, so the drift takes nothing from the
-        other noise columns: the same runs see the same IMU, range and v_r noise under both bias models.
-        """
-        if self.heading_bias_model == "random_walk":
-            return 0.0
-        return math.radians(self.heading_drift_deg_per_h) / 3600.0 * float(noise[0, 3])
-
-    def inertial_config(self, dt_s: float, **overrides) -> InertialConfig:
-        """The inertial filter told the truth about these sensors (densities at the step ``dt_s``).
-
-        The simulated range and v_r have Gaussian errors only, no outliers, so the filter told the truth has no
-        χ² gate (``gate_probability=None``; pass it in ``overrides`` to study the gate). Measured: with the
-        records' default gate (p = 0.9999) the filter gated 15–43 of 23 000 frames per 300 receiver-grade
-        missions at T_com 12–20 s, every one a nonlinearity of the filter near a lane's closest approach and
-        not a bad measurement, and 1 mission in 300 then left the truth by more than 50 m; without the gate
-        the worst mission stayed within 22 m (seeds 0–2).
-
-        Random-walk bias: the bias random walk is the stated one. Drifting bias: the drift rate is a state
-        with that prior and the bias keeps a small random walk (0.5°/h after one hour) for what a constant
-        rate does not describe.
-        """
-        if self.heading_bias_model == "drift":
-            extra = dict(bias_rw=math.radians(0.5) / 60.0, estimate_bias_drift=True,
-                         p0_bias_drift_rad_s=max(math.radians(self.heading_drift_deg_per_h), 1e-9) / 3600.0)
-        else:
-            extra = dict(bias_rw=math.radians(self.heading_drift_deg_per_h) / 60.0)
-        extra["gate_probability"] = None
-        return InertialConfig.from_noise_model(self, dt_s, **{**extra, **overrides})
-
-
-@dataclass(frozen=True, kw_only=True)
-class MissionConfig:
-    """One simulated mission of paper 000 §4.1.
-
-    Parameters
-    ----------
-    tcom_s : float
-        Period of the acoustic frames [s]; must be a multiple of ``dt_s``.
-    dt_s : float
-        Filter and simulation step [s] (Table 2: 0.25 s).
-    beacon_xy : tuple
-        Beacon position [m] (Table 2: (50, 100)).
-    r_diag : tuple
-        Filter R for (d, v_r, ψ, Ω, a) — eq 25's diag(1, 0.005, 0.005, 12, 0.2)
-        in eq 18's order (:data:`.paper.EQ25_R_DIAG`).
-    q : float, tuple of 6 floats, or None
-        Process noise variance per step: one value for every state, or one per
-        state (x, y, ψ, v, Ω, a); ``None`` means Δt⁸ for all (eq 25).
-    p0_diag : tuple
-        Initial covariance diagonal (not printed in paper 000; I₆ as in papers 002–003).
-    steer_on_estimate : bool
-        The controller steers on the filter's estimate (a real vehicle) rather than on the truth.
-    v_min_mps, v_max_mps : float
-        Vehicle speed limits (Table 2: |v| ≤ 3 m/s; v ≥ 0.1 m/s keeps eq 2 regular).
-    omega_max_rad_s, accel_max_mps2 : float
-        Actuator limits of the controller (not in the paper; our choice for a
-        micro-AUV: 0.5 rad/s, 0.5 m/s²). Without them, steering on the estimate
-        turns each range correction into a step command the filter's
-        near-constant-acceleration model (Q = Δt⁸) cannot follow.
-    noise : NoiseModel
-        Emulated measurement noise.
-    error_of : {"estimate", "smoothed", "last_fix"}
-        Which position the error is measured on: the filter's real-time estimate
-        (paper 000), the Rauch–Tung–Striebel smoothed track (post-processing,
-        :mod:`~seamodem.navigation.ekf_smoother`; the controller still steers on the
-        filter), or the filter's position at the last frame held until the next
-        one (a diagnostic: the error the paper's Table 3 is consistent with, see
-        docs/navigation.md).
-    path : dict
-        Keyword arguments of :func:`~seamodem.navigation.trajectories.boustrophedon`.
-    inertial : InertialConfig, optional
-        The inertial filter's settings; ``None``: :meth:`NoiseModel.inertial_config` (told the truth).
-    start_error : bool
-        Start the inertial filter off the truth by a draw from its initial covariance (position, speed)
-        and start the true heading bias from its prior: what a consistency check needs. ``False`` (the
-        paper's protocol): the filter starts at the true position and speed, the bias at 0.
-    lag_s : float
-        Latency of the fixed-lag smoother [s].
-    divergence_m : float
-        A run whose position error ever exceeds this [m] (or is not finite) counts as diverged.
-    current_mps : tuple
-        True water current (east, north) [m/s]; only the inertial filters' missions simulate it.
-    range_scale : float
-        True scale error of range and v_r (a sound-speed error c_true/c_assumed − 1); inertial missions only.
-    """
-
-    tcom_s: float = 3.0
-    dt_s: float = 0.25
-    beacon_xy: tuple = (50.0, 100.0)
-    r_diag: tuple = EQ25_R_DIAG
-    q: float | None = None
-    p0_diag: tuple = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
-    steer_on_estimate: bool = True
-    v_min_mps: float = 0.1
-    v_max_mps: float = 3.0
-    omega_max_rad_s: float = 0.5
-    accel_max_mps2: float = 0.5
-    noise: NoiseModel = field(default_factory=NoiseModel)
-    error_of: str = "estimate"
-    path: dict = field(default_factory=dict)
-    inertial: InertialConfig | None = None
-    start_error: bool = False
-    lag_s: float = 10.0
-    divergence_m: float = 50.0
-    current_mps: tuple = (0.0, 0.0)
-    range_scale: float = 0.0
-
-    def __post_init__(self):
-        if not (math.isfinite(self.lag_s) and self.lag_s > 0):
-            raise ConfigError("lag_s", f"must be > 0 s, got {self.lag_s!r}")
-        if not self.divergence_m > 0:
-            raise ConfigError("divergence_m", f"must be > 0 m, got {self.divergence_m!r}")
-        if len(self.current_mps) != 2 or not all(math.isfinite(c) for c in self.current_mps):
-            raise ConfigError("current_mps", f"must be two finite speeds [m/s], got {self.current_mps!r}")
-        if not (math.isfinite(self.range_scale) and abs(self.range_scale) < 0.1):
-            raise ConfigError("range_scale", f"must be finite and within ±0.1, got {self.range_scale!r}")
-        if not self.dt_s > 0:
-            raise ConfigError("dt_s", f"must be > 0 s, got {self.dt_s!r}")
-        ratio = self.tcom_s / self.dt_s
-        if not (self.tcom_s > 0 and abs(ratio - round(ratio)) < 1e-9):
-            raise ConfigError("tcom_s", f"must be a positive multiple of dt_s = {self.dt_s} s, got {self.tcom_s!r}")
-        if len(self.r_diag) != 5 or min(self.r_diag) <= 0:
-            raise ConfigError("r_diag", f"must be 5 positive variances (d, v_r, ψ, Ω, a), got {self.r_diag!r}")
-        if len(self.p0_diag) != 6 or min(self.p0_diag) <= 0:
-            raise ConfigError("p0_diag", f"must be 6 positive variances, got {self.p0_diag!r}")
-        if self.q is not None:
-            q = np.atleast_1d(np.asarray(self.q, dtype=float))
-            if q.size not in (1, 6) or q.ndim != 1 or not np.all(np.isfinite(q)) or np.any(q < 0):
-                raise ConfigError("q", f"must be one or 6 finite variances >= 0, got {self.q!r}")
-        if self.error_of not in ERROR_OF:
-            raise ConfigError("error_of", f"must be one of {ERROR_OF}, got {self.error_of!r}")
-
-    @property
-    def process_variance(self) -> float:
-        """Process noise variance of the position states per step (all states when ``q`` is a scalar)."""
-        return float(self.process_diag[0])
-
-    @property
-    def process_diag(self) -> np.ndarray:
-        """Diagonal of the filter's Q per step, (x, y, ψ, v, Ω, a)."""
-        if self.q is None:
-            return np.full(6, eq25_q(self.dt_s))
-        return np.broadcast_to(np.asarray(self.q, dtype=float), (6,)).copy()
-
-    @property
-    def inertial_config(self) -> InertialConfig:
-        """The inertial filter's settings (:attr:`inertial`, or told the truth about the sensors)."""
-        return self.inertial if self.inertial is not None else self.noise.inertial_config(self.dt_s)
-
-    @property
-    def com_every(self) -> int:
-        return int(round(self.tcom_s / self.dt_s))
-
-    def reference(self):
-        """Desired path sampled at every step: array (n + 1, 6) and the path object."""
-        path = boustrophedon(**self.path)
-        n = int(round(path.duration_s / self.dt_s))
-        sample = path.sample(np.arange(n + 1) * self.dt_s)
-        return np.hstack([sample.position, sample.velocity, sample.acceleration]), path
-
-
-def mission_noise(seed: int, run: int, n_steps: int) -> np.ndarray:
-    """Standard normals of run ``run``, shape (n_steps + 1, 6), from ``default_rng([seed, run])``."""
-    return np.random.default_rng([seed, run]).standard_normal((n_steps + 1, len(NOISE_COLUMNS)))
-
-
-def _start_state(reference: np.ndarray) -> np.ndarray:
-    """True initial state: on the path, heading and speed along it."""
-    vx, vy = reference[0, 2], reference[0, 3]
-    return np.array([reference[0, 0], reference[0, 1], math.atan2(vy, vx), math.hypot(vx, vy)])
-
-
-def simulate_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = "proposed", reference=None):
-    """One mission with the compiled kernel: (error (n+1,), estimate (n+1, 2), truth (n+1, 2)) [m].
-
-    ``estimate`` is the position ``config.error_of`` names: the filter's, the
-    smoothed one, or the last frame's held until the next.
-    """
-    if filter in INERTIAL_FILTERS:
-        return simulate_inertial_mission(config, noise, filter=filter, reference=reference)[:3]
-    if filter not in FILTERS:
-        raise ConfigError("filter", f"must be one of {ALL_FILTERS}, got {filter!r}")
-    if config.current_mps != (0.0, 0.0) or config.range_scale != 0.0:
-        raise ConfigError("current_mps", "a current or a range scale is simulated for the inertial filters only")
-    if reference is None:
-        reference, _ = config.reference()
-    n = reference.shape[0] - 1
-    history = np.empty((n + 1 if config.error_of == "smoothed" else 0, 6, 20))
-    error, estimate, truth = mission_kernel(
-        reference,
-        noise,
-        _start_state(reference),
-        config.noise.sigmas(config.dt_s),
-        np.asarray(config.r_diag, dtype=float),
-        np.asarray(config.p0_diag, dtype=float),
-        np.asarray(config.beacon_xy, dtype=float),
-        config.dt_s,
-        config.process_diag,
-        config.com_every,
-        filter == "proposed",
-        config.steer_on_estimate,
-        config.v_min_mps,
-        config.v_max_mps,
-        config.omega_max_rad_s,
-        config.accel_max_mps2,
-        history,
-        config.noise.bias_rate(noise),
-    )
-    if config.error_of == "estimate":
-        return error, estimate, truth
-    if config.error_of == "smoothed":
-        smoothed, _ = rts_smooth(history[:, :, 1], history[:, :, 8:14], history[:, :, 0], history[:, :, 2:8],
-                                 history[:, :, 14:20])
-        estimate = np.ascontiguousarray(smoothed[:, :2])
-    else:
-        estimate = estimate[held_fix_index(n, config.com_every)]
-    return np.hypot(*(estimate - truth).T), estimate, truth
-
-
-def simulate_inertial_mission(config: MissionConfig, noise: np.ndarray, *, filter: str = "inertial",
-                              reference=None):
-    """One mission with the inertial filter in the loop: (error, estimate, truth, details) [m].
-
-    ``filter``: ``"inertial"`` (range + v_r), ``"inertial_range"`` (range only), or a smoother of the
-    ``"inertial"`` mission, ``"fixed_lag"`` (latency ``config.lag_s``) or ``"batch"``. The controller steers
-    on the filter (or the truth); a smoother post-processes the sensors that mission recorded, through the
-    same filter re-run over them (equal to the in-loop filter: tested). ``details`` has the filter's
-    ``status`` and ``nis`` per step, the recorded ``sensors`` (n + 1, 6) and, for smoothers, the
-    ``states`` and ``covariances`` of the output.
-    """
-    from ._inertial_mission import InertialMission, inertial_mission_kernel
-    from .inertial.driver import filter_model, filter_settings
-
-    if filter not in INERTIAL_FILTERS:
-        raise ConfigError("filter", f"must be one of {INERTIAL_FILTERS}, got {filter!r}")
-    if config.error_of != "estimate":
-        raise ConfigError("error_of", "the inertial filters have their own smoothers (filter 'fixed_lag' or "
-                                      f"'batch'); error_of must be 'estimate', got {config.error_of!r}")
-    if reference is None:
-        reference, _ = config.reference()
-    n = reference.shape[0] - 1
-    icfg = config.inertial_config
-    start = _start_state(reference)
-    use_vr = filter != "inertial_range"
-    z0, P0 = icfg.initial(start[0], start[1], 0.0, start[3])
-    offsets = np.zeros(4)
-    if config.start_error:
-        # row 0's columns 1, 2, 4, 5 are used by no kernel (0: the first heading reading, 3: the bias drift)
-        offsets[:] = (icfg.p0_position_m * noise[0, 1], icfg.p0_position_m * noise[0, 2],
-                      icfg.p0_speed_mps * noise[0, 4], icfg.p0_bias_rad * noise[0, 5])
-    sig = config.noise.sigmas(config.dt_s)
-    meas_var = np.array([max(config.noise.sigma_range_m, 1e-6) ** 2, max(config.noise.sigma_vr_mps, 1e-6) ** 2])
-    sensors = np.empty((n + 1, 6))
-    bearing_sigma = math.radians(config.noise.sigma_bearing_deg)
-    if bearing_sigma > 0 and config.com_every < 2:
-        raise ConfigError("sigma_bearing_deg", "a bearing needs T_com of at least two IMU steps (its noise is drawn "
-                                               f"from the step before the frame), got T_com {config.tcom_s} s")
-    mission = InertialMission(reference, noise, start, offsets, sig, config.dt_s, config.com_every,
-                              config.steer_on_estimate, config.v_min_mps, config.v_max_mps, config.omega_max_rad_s,
-                              config.accel_max_mps2, np.asarray(config.current_mps, dtype=float), config.range_scale,
-                              config.noise.bias_rate(noise), bearing_sigma, icfg.heading_sigma_rad**2, meas_var)
-    error, estimate, truth, status, nis = inertial_mission_kernel(
-        mission, z0, P0, icfg.layout, filter_model(icfg, config.beacon_xy, use_range=True, use_vr=use_vr),
-        filter_settings(icfg, use_range=True, use_vr=use_vr), sensors)
-    details = {"status": status, "nis": nis, "sensors": sensors}
-    if filter in ("inertial", "inertial_range"):
-        return error, estimate, truth, details
-    from .inertial import add_bearings, build_nodes, run_filter
-    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
-
-    t = np.arange(n + 1) * config.dt_s
-    frames = np.isfinite(sensors[:, 3])
-    nodes = build_nodes(t, sensors[:, 0], sensors[:, 1], sensors[:, 2], t[frames], sensors[frames, 3],
-                        sensors[frames, 4], meas_var[0], meas_var[1], heading_var=icfg.heading_sigma_rad**2)
-    if bearing_sigma > 0:
-        nodes = add_bearings(nodes, sensors[frames, 5], bearing_sigma)
-    z_start = z0.copy()
-    z_start[[0, 1, 3]] += offsets[:3]
-    z_start[2] = sensors[0, 0] - z_start[4]
-    run = run_filter(nodes, icfg, beacon_xy=config.beacon_xy, z0=z_start, P0=P0, use_vr=True)
-    out = batch_smooth(run) if filter == "batch" else fixed_lag_smooth(run, lag_s=config.lag_s)
-    estimate = np.ascontiguousarray(out.states[:, :2])
-    details.update(states=out.states, covariances=out.covariances, filter_run=run)
-    return np.hypot(*(estimate - truth).T), estimate, truth, details
-
-
-def held_fix_index(n_steps: int, com_every: int) -> np.ndarray:
-    """Index of the last frame step at or before each step 0…n (step 0: the start fix)."""
-    k = np.arange(n_steps + 1)
-    return (k // com_every) * com_every
-
-
-def simulate_mission_reference(config: MissionConfig, noise: np.ndarray, *, filter: str = "proposed",
-                               reference=None, filter_factory=None):
-    """The same mission as :func:`simulate_mission`, written with the general EKF class.
-
-    This is the pure-Python form the compiled kernel is tested against (and the
-    timing reference of ``benchmarks/bench_navigation.py``); the IMU readings are
-    :mod:`.imu`'s, the same functions the kernel calls. ``filter_factory``
-    (x0, P0, Q, model) → object with ``predict(t_s)`` / ``update(z, kind, R)`` and
-    ``x`` lets the benchmark plug in another EKF implementation.
-    """
-    if config.error_of == "smoothed":
-        raise ConfigError("error_of", "'smoothed' is computed by simulate_mission only (the compiled kernel)")
-    if reference is None:
-        reference, _ = config.reference()
-    n = reference.shape[0] - 1
-    sig = config.noise.sigmas(config.dt_s)
-    dt = config.dt_s
-    model = Auv6Model(config.beacon_xy)
-    x, y, psi, v = _start_state(reference)
-    x0 = np.array([x, y, psi, v, 0.0, 0.0])
-    P0 = np.diag(config.p0_diag)
-    Q = np.diag(config.process_diag)
-    factory = filter_factory or (lambda x0, P0, Q, model: ExtendedKalmanFilter(model, x0, P0, Q))
-    ekf = factory(x0, P0, Q, model)
-    r = dict(zip(EQ25_ORDER, config.r_diag))
-    kind = "com" if filter == "proposed" else "rosb"
-    R_com = np.diag([r[c] for c in model.kinds[kind]])
-    R_ahrs = np.diag([r[c] for c in model.kinds["ahrs"]])
-    error, estimate, truth = np.zeros(n + 1), np.zeros((n + 1, 2)), np.zeros((n + 1, 2))
-    estimate[0], truth[0] = x0[:2], (x, y)
-    bias = 0.0
-    bias_rate = config.noise.bias_rate(noise)
-
-    def command(k):
-        s = ekf.x[:4] if config.steer_on_estimate else (x, y, psi, v)
-        return feedback_command(*s, *reference[k], config.v_min_mps, config.omega_max_rad_s, config.accel_max_mps2)
-
-    omega, accel = command(0)
-    for k in range(1, n + 1):
-        v_old = v
-        x, y, psi, v = vehicle_step(x, y, psi, v, omega, accel, dt, config.v_min_mps, config.v_max_mps)
-        ekf.predict(k * dt)
-        bias = bias_step(bias, sig, noise, k, bias_rate, dt)
-        ahrs = list(imu_reading(psi, bias, omega, (v - v_old) / dt, sig, noise, k))
-        if k % config.com_every == 0:
-            d = math.hypot(x - config.beacon_xy[0], y - config.beacon_xy[1]) + sig[4] * noise[k, 4]
-            vr = float(closing_speed(x, y, psi, v, config.beacon_xy)) + sig[5] * noise[k, 5]
-            ekf.update([d, vr, *ahrs] if kind == "com" else [d, *ahrs], kind, R_com)
-        else:
-            ekf.update(ahrs, "ahrs", R_ahrs)
-        estimate[k], truth[k] = ekf.x[:2], (x, y)
-        error[k] = math.hypot(*(estimate[k] - truth[k]))
-        omega, accel = command(k)
-    if config.error_of == "last_fix":
-        estimate = estimate[held_fix_index(n, config.com_every)]
-        error = np.hypot(*(estimate - truth).T)
-    return error, estimate, truth
 
 
 def outlier_mask(values: np.ndarray) -> np.ndarray:

@@ -3,7 +3,7 @@
 One pass per sample instead of a dozen numpy passes (window, phase, exponential, derivative): the fine fit of
 :mod:`seamodem.receive.reference` evaluates 30–40 replicas of ~1000 samples per ping, where numpy's per-call
 overhead dominated (130–160 µs each). The formulas are those of
-:func:`seamodem.transmit.reference._window`, ``_window_derivative`` and ``_chirp_phase`` (tested against them).
+:func:`seamodem.transmit.replica._window`, ``_window_derivative`` and ``_chirp_phase`` (tested against them).
 Imported lazily (numba stays out of the command line's import).
 """
 

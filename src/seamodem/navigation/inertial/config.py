@@ -158,7 +158,7 @@ class InertialConfig:
 
     @classmethod
     def from_noise_model(cls, noise, dt_s: float, **overrides) -> "InertialConfig":
-        """Densities from the per-sample standard deviations of a :class:`~seamodem.navigation.montecarlo.NoiseModel`.
+        """Densities from the per-sample standard deviations of a :class:`~seamodem.navigation.mission_config.NoiseModel`.
 
         Parameters
         ----------
