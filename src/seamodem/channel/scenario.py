@@ -75,8 +75,26 @@ MODES = ("geometry", "profile", "replay")
 class Scenario:
     """A whole scenario: the mode, a seed, and one record per table.
 
-    ``base_dir`` resolves relative file names (track, replay file); it is the
-    scenario file's folder when loaded from a file.
+    Attributes
+    ----------
+    mode : {"geometry", "profile", "replay"}
+        How the paths are made: image sources over a moving vehicle, Doppler profiles, or a measured
+        channel replayed.
+    seed : int
+        Seeds the fading and the noise (two independent streams).
+    description : str
+        Free text.
+    environment, beacon, vehicle, doppler, multipath, fluctuation, noise, clock, replay, two_way
+        One record per TOML table (:mod:`~seamodem.channel.scenario_sections`); None where the table is
+        absent and the mode does not need it.
+    base_dir : Path
+        Resolves relative file names (track, replay file): the scenario file's folder when loaded from a
+        file.
+
+    Raises
+    ------
+    ConfigError
+        An unknown mode, a negative or non-integer seed, or a table the mode needs missing.
     """
 
     mode: str
@@ -170,6 +188,18 @@ def _check_in_water(name: str, z: float, depth: float) -> None:
 def parse_scenario(data: dict[str, Any], *, base_dir: str | Path = ".") -> Scenario:
     """Build a :class:`Scenario` from a mapping (a parsed TOML file).
 
+    Parameters
+    ----------
+    data : dict
+        The scenario's tables (top-level ``mode``, ``seed``, ``description`` and one table per section).
+    base_dir : str or Path
+        Folder that relative file names in the tables are resolved against.
+
+    Returns
+    -------
+    Scenario
+        Validated.
+
     Raises
     ------
     ConfigError
@@ -195,12 +225,23 @@ def parse_scenario(data: dict[str, Any], *, base_dir: str | Path = ".") -> Scena
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file.
 
+    Parameters
+    ----------
+    path : str or Path
+        The scenario file.
+
+    Returns
+    -------
+    Scenario
+        Validated, relative file names resolved against the file's folder.
+
     Raises
     ------
     InputFileError
         Missing file or invalid TOML.
     ConfigError
-        An unknown key or an invalid value, named as ``section.key``.
+        An unknown key or an invalid value (or one of the wrong type), named as ``section.key`` after
+        the file.
     """
     path = Path(path)
     tables = read_scenario_tables(path)

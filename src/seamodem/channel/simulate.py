@@ -214,6 +214,24 @@ def simulate_file(
     Memory stays bounded: the input is read and the output written in blocks,
     through a temporary file beside OUT.wav.
 
+    Parameters
+    ----------
+    in_wav : str or Path
+        The transmitted recording (``seamodem tx``: frames or reference pings) with its sidecar.
+    scenario : Scenario
+        The channel.
+    out_wav : str or Path
+        The received recording to write (its sidecar beside it).
+    command : str
+        The command line, recorded in the sidecar.
+    progress : bool, optional
+        Progress bar (None: on a terminal).
+
+    Returns
+    -------
+    dict
+        The output sidecar as written.
+
     Raises
     ------
     InputFileError

@@ -82,8 +82,31 @@ def decode_frame(
 ) -> TurboResult:
     """Equalise and decode a Doppler-compensated frame (passes = 1: DFE only; more: turbo).
 
-    ``settings=None`` sizes the equaliser to the frame's measured delay spread
-    (:func:`channel_span_symbols`, :func:`dfe_for_span`).
+    Parameters
+    ----------
+    bb : numpy.ndarray, complex, (n_samples,)
+        Data-band baseband around the frame.
+    fs : float
+        Its sample rate [Hz].
+    t0_s : float
+        Time of ``bb[0]`` on the recording's clock [s].
+    compensated
+        The frame's Doppler compensation (eq 10–11): symbol instants and phases
+        (:func:`~seamodem.receive.compensate.compensate_frame`).
+    config : FrameConfig
+        The frame.
+    pilot : numpy.ndarray, complex, (n_pilot,)
+        The pilot symbols.
+    settings : DfeSettings or None
+        The equaliser; None sizes it to the frame's measured delay spread
+        (:func:`channel_span_symbols`, :func:`dfe_for_span`).
+    passes : int
+        Most equaliser passes (1: DFE only; more: turbo while the CRC fails).
+
+    Returns
+    -------
+    TurboResult
+        Payload, CRC, equaliser output and passes run.
     """
     sps = DfeSettings().sps if settings is None else settings.sps
     x = fractional_samples(bb, fs, t0_s, compensated, config, sps)
