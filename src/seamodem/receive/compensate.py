@@ -146,7 +146,7 @@ def echo_contributions(
     contribution : numpy.ndarray, complex
         Σ_p s_p[n] for n in [lo, lo + len).
     """
-    from .wholeframe import _instants, _phase, _Segment
+    from .wholeframe import FrameSegment, path_phase, symbol_instants
 
     c = sound_speed_mps
     span = config.srrc_span_symbols * int(fs * config.symbol_period_s + 1)
@@ -155,11 +155,11 @@ def echo_contributions(
     hi = min(n_samples, int((float(delays.max()) + config.frame_duration_s - t0_s) * fs) + span)
     if hi <= lo:
         return lo, np.zeros(0, complex)
-    seg = _Segment(hi - lo, fs, t0_s + lo / fs, config=config)
+    seg = FrameSegment(hi - lo, fs, t0_s + lo / fs, config=config)
     x = np.asarray(symbols, dtype=complex)
     total = np.zeros(hi - lo, complex)
     for p in paths:
         eps, beta, tau = fit.v_mps[p] / c, fit.accel_mps2[p] / c, delays[p]
-        shape = seg.synthesize(x, _instants(config, tau, eps, beta), scale=1 + eps)
-        total += fit.amplitudes[p] * shape * np.exp(1j * _phase(config, seg.t_s - tau, eps, beta))
+        shape = seg.synthesize(x, symbol_instants(config, tau, eps, beta), scale=1 + eps)
+        total += fit.amplitudes[p] * shape * np.exp(1j * path_phase(config, seg.t_s - tau, eps, beta))
     return lo, total

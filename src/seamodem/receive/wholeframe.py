@@ -26,7 +26,7 @@ Sweeps repeat until none moves a path's Doppler by a quarter of its σ nor its
 delay by its σ (3 sweeps): the paths interfere only through the data's random cross-correlation
 once their delays differ by a symbol or more. The matched filter and the
 synthesis of each path's contribution are computed in the FFT domain on the
-frame's stretch of baseband (:class:`_Segment`), the pulse's time scale exact.
+frame's stretch of baseband (:class:`FrameSegment`), the pulse's time scale exact.
 
 The standard deviation of each path's Doppler is the least-squares one from
 the segments' phase residuals (it grows with whatever the model leaves:
@@ -103,16 +103,48 @@ def known_signal_velocity_crlb_mps(config: FrameConfig, es_n0, n_symbols: int, *
     return sound_speed_mps / config.carrier_hz * sigma_f
 
 
-def _instants(config: FrameConfig, delay_s: float, eps: float, beta: float) -> np.ndarray:
-    """Arrival of each symbol's pulse centre on a path: α(t) = τ_k solved to first order in the drift."""
+def symbol_instants(config: FrameConfig, delay_s: float, eps: float, beta: float) -> np.ndarray:
+    """Arrival of each symbol's pulse centre on a path: α(t) = τ_k solved to first order in the drift.
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The frame.
+    delay_s : float
+        The path's frame-start arrival [s].
+    eps : float
+        Its mean Doppler scale v/c over the frame.
+    beta : float
+        Its drift d(v/c)/dt [1/s].
+
+    Returns
+    -------
+    numpy.ndarray, (n_pilot + n_data,)
+        Arrival time of each symbol's pulse centre [s].
+    """
     tau = (config.n_guard + np.arange(config.n_pilot + config.n_data)) * config.symbol_period_s
     half = config.frame_duration_s / 2
     d = tau / (1 + eps)
     return delay_s + (tau - 0.5 * beta * ((d - half) ** 2 - half**2)) / (1 + eps)
 
 
-def _phase(config: FrameConfig, t_rel: np.ndarray, eps: float, beta: float) -> np.ndarray:
-    """Carrier phase of a path at t − τ_p [rad] (module docstring)."""
+def path_phase(config: FrameConfig, t_rel: np.ndarray, eps: float, beta: float) -> np.ndarray:
+    """Carrier phase of a path at t − τ_p [rad] (module docstring).
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The frame (its carrier).
+    t_rel : numpy.ndarray
+        Time since the path's frame-start arrival [s].
+    eps, beta : float
+        The path's mean Doppler scale and its drift [1/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        The phase 2π f0 [ε t + ½β((t − D/2)² − (D/2)²)] [rad].
+    """
     half = config.frame_duration_s / 2
     return 2 * np.pi * config.carrier_hz * (eps * t_rel + 0.5 * beta * ((t_rel - half) ** 2 - half**2))
 
@@ -204,7 +236,7 @@ def _spread_kernel(x, pos, basis, first_tap, grid):
             grid[(i + first_tap + j) % big] += w * x[k]
 
 
-class _Segment:
+class FrameSegment:
     """FFT-domain SRRC matched filter and synthesis on one stretch of baseband.
 
     The SRRC is band-limited below fs/2, so with h the unit-energy pulse of
@@ -320,7 +352,7 @@ def fit_whole_frame(
     amps = np.zeros(n_paths, complex)
     lo = max(0, int((delays[0] - t0_s) * fs) - config.srrc_span_symbols * int(fs * config.symbol_period_s + 1))
     hi = min(len(bb), int((delays[-1] + config.frame_duration_s - t0_s) * fs) + 1)
-    seg = _Segment(hi - lo, fs, t0_s + lo / fs, config=config)
+    seg = FrameSegment(hi - lo, fs, t0_s + lo / fs, config=config)
     seg_bb = bb[lo:hi]
     models = np.zeros((n_paths, hi - lo), complex)
     total = np.zeros(hi - lo, complex)  # Σ models
@@ -331,15 +363,15 @@ def fit_whole_frame(
     half = config.frame_duration_s / 2
 
     def model(p):
-        inst = _instants(config, delays[p], eps[p], beta[p])
+        inst = symbol_instants(config, delays[p], eps[p], beta[p])
         shape = seg.synthesize(x, inst, scale=1 + eps[p])
-        return amps[p] * shape * np.exp(1j * _phase(config, seg.t_s - delays[p], eps[p], beta[p]))
+        return amps[p] * shape * np.exp(1j * path_phase(config, seg.t_s - delays[p], eps[p], beta[p]))
 
     def outputs(p, r):
         """Symbols stripped matched-filter outputs z_k of path p and their time derivatives, drift phase removed."""
-        inst = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
+        inst = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx]
         y, dy = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p], derivative=True)
-        strip = np.exp(-1j * _phase(config, inst - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
+        strip = np.exp(-1j * path_phase(config, inst - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
         return y * strip, dy * strip, inst
 
     def timing_fit(z, dz, p):
@@ -404,7 +436,7 @@ def fit_whole_frame(
         total = model(0)
     # noise per matched-filter output from the residual of all paths, at the first path's instants
     resid = seg_bb - total
-    inst = _instants(config, delays[0], eps[0], beta[0])[ref_idx]
+    inst = symbol_instants(config, delays[0], eps[0], beta[0])[ref_idx]
     noise = seg.filter(resid, inst, scale=1 + eps[0], offset_hz=f0 * eps[0], t_ref_s=delays[0])
     noise_var = max(float(np.mean(np.abs(noise) ** 2)), np.finfo(float).tiny)
     es_n0 = np.abs(amps) ** 2 / noise_var
