@@ -75,8 +75,8 @@ def outputs(tree: Path, work: Path) -> dict[str, bytes]:
     seamodem(tree, "rx", work / "rx.wav", "-o", work / "records.csv", "-q")
     text = (work / "records.csv").read_text(encoding="utf-8") if (work / "records.csv").exists() else ""
     out["rx doppler_profile records"] = "\n".join(r for r in text.splitlines() if not r.startswith("#")).encode()
-    # the array receiver: 4 elements through the channel, rx --array (records, less the run's wall time)
-    seamodem(tree, "channel", work / "tx.wav", "--scenario", tree / "examples/scenarios/doppler_profile.toml",
+    # the array receiver: 4 elements through a geometry channel, rx --array
+    seamodem(tree, "channel", work / "tx.wav", "--scenario", tree / "examples/scenarios/straight_line.toml",
              "--array", "tetra:0.08", "-o", work / "rx4.wav", "-q")
     seamodem(tree, "rx", work / "rx4.wav", "--array", "tetra:0.08", "-o", work / "array.csv", "-q")
     out["rx --array records"] = (work / "array.csv").read_bytes() if (work / "array.csv").exists() else b"(missing)"
@@ -143,7 +143,7 @@ def timings(trees: dict[str, Path], work: Path) -> dict[str, dict[str, str]]:
     first = next(iter(trees.values()))
     seamodem(first, "tx", "--count", 20, "--period", 3, "-o", beacon, "-q")
     seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/doppler_profile.toml", "-o", rec, "-q")
-    seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/doppler_profile.toml",
+    seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/straight_line.toml",
              "--array", "tetra:0.08", "-o", work / "rt_rx4.wav", "-q")
     seamodem(first, "tx", "--reference", "lfm:18000-30000:0.08", "--count", 20, "--period", 3, "--start", 0.2,
              "-o", work / "rt_ref.wav", "-q")
@@ -187,7 +187,9 @@ def main() -> int:
         a, b = out.values()
         lines.append(f"{'output':45} | same bytes in {args.base} and {args.head}")
         for name in sorted(set(a) | set(b)):
-            lines.append(f"{name:45} | {'yes' if a.get(name) == b.get(name) else 'NO'}")
+            same = a.get(name) == b.get(name)
+            missing = b"(missing)" in (a.get(name), b.get(name))
+            lines.append(f"{name:45} | {'MISSING' if missing else 'yes' if same else 'NO'}")
         figures = {rev: shape(tree, scan_tests) for rev, tree in trees.items()}
         if not args.no_timing:
             for rev, t in timings(trees, tmp).items():
