@@ -18,11 +18,25 @@ class ConfigError(SeamodemError, ValueError):
         Name of the offending parameter, as spelled in the configuration.
     message : str
         What is wrong: the limit and the value given.
+    file : str or Path, optional
+        The file the value was read from, named first in the message.
     """
 
-    def __init__(self, parameter: str, message: str):
+    def __init__(self, parameter: str, message: str, *, file=None):
         self.parameter = parameter
-        super().__init__(f"{parameter}: {message}")
+        self.message = message
+        self.file = file
+        super().__init__(f"{parameter}: {message}" if file is None else f"{file}: {parameter}: {message}")
+
+    def in_file(self, file) -> "ConfigError":
+        """The same error, the file it was read from named first."""
+        return ConfigError(self.parameter, self.message, file=file)
+
+
+def value_text(value, limit: int = 40) -> str:
+    """A value as an error message quotes it: its repr, cut to ``limit`` characters (never a file's contents)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 class InputFileError(SeamodemError, OSError):

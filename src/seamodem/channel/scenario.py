@@ -628,7 +628,13 @@ def load_scenario(path: str | Path) -> Scenario:
         An unknown key or an invalid value, named as ``section.key``.
     """
     path = Path(path)
-    return parse_scenario(read_scenario_tables(path), base_dir=path.parent)
+    tables = read_scenario_tables(path)
+    try:
+        return parse_scenario(tables, base_dir=path.parent)
+    except ConfigError as exc:
+        raise exc.in_file(f"scenario {path}") from None
+    except (TypeError, ValueError, OverflowError) as exc:  # a value of a type no check expected
+        raise ConfigError("scenario", f"a value is of the wrong type ({exc})", file=f"scenario {path}") from None
 
 
 def read_scenario_tables(path: str | Path) -> dict[str, Any]:

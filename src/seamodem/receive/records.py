@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, NamedTuple, Sequence
 
-from ..errors import InputFileError, SeamodemError
+from ..errors import InputFileError, SeamodemError, value_text
 from ..io.files import atomic_outputs
 
 __all__ = [
@@ -334,8 +334,7 @@ def _read_csv(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """(inline header of a format-1 file or {}, rows) of a CSV measurement file."""
     header: dict[str, Any] = {}
     # newline="": a payload_text with a line break is one quoted field, kept as written
-    with path.open(encoding="utf-8-sig", newline="") as f:
-        text = f.read()
+    text = _read_text(path)
     pos = 0
     while text.startswith("# ", pos):  # format 1: '# key: json' lines before the header row
         end = text.find("\n", pos)
@@ -346,13 +345,25 @@ def _read_csv(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
         except json.JSONDecodeError:
             raise InputFileError(f"{path}: header line {key!r} is not valid JSON") from None
         pos = end
-    return header, list(csv.DictReader(io.StringIO(text[pos:], newline="")))
+    try:
+        return header, list(csv.DictReader(io.StringIO(text[pos:], newline="")))
+    except csv.Error as exc:
+        raise InputFileError(f"{path} is not a readable CSV table ({exc})") from None
+
+
+def _read_text(path: Path) -> str:
+    """A measurement file's text (UTF-8, a byte-order mark allowed)."""
+    try:
+        with path.open(encoding="utf-8-sig", newline="") as f:
+            return f.read()
+    except UnicodeDecodeError as exc:
+        raise InputFileError(f"{path} is not UTF-8 text (byte {exc.start} is {exc.object[exc.start]:#04x}): "
+                             "not a measurement file, or damaged") from None
 
 
 def _read_jsonl(path: Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """(inline header of a format-1 file or {}, rows) of a JSON Lines measurement file."""
-    with path.open(encoding="utf-8-sig", newline="") as f:
-        lines = [line for line in f.read().split("\n") if line.strip()]
+    lines = [line for line in _read_text(path).split("\n") if line.strip()]
     rows = []
     for i, line in enumerate(lines):
         try:
@@ -404,7 +415,7 @@ def read_measurements(path: str | Path) -> Measurements:
     if not header and sidecar.is_file():
         try:
             header = json.loads(sidecar.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise InputFileError(f"measurement sidecar {sidecar} is not valid JSON: {exc}") from None
         if not isinstance(header, dict) or header.get("format") != MEASUREMENT_FORMAT:
             raise InputFileError(f"{sidecar} is not a seamodem measurement sidecar ({MEASUREMENT_FORMAT!r} expected)")
@@ -418,8 +429,13 @@ def read_measurements(path: str | Path) -> Measurements:
         missing = [k for k in FIELDS if k not in row and k not in OPTIONAL_FIELDS]
         if missing:
             raise InputFileError(f"{path}: row {i + 1} lacks {', '.join(missing)}")
-        try:
-            records.append(MeasurementRecord(**{k: _parse(k, row[k]) for k in FIELDS if k in row}))
-        except (TypeError, ValueError) as exc:
-            raise InputFileError(f"{path}: row {i + 1}: a value is not of its column's type ({exc})") from None
+        values = {}
+        for k in FIELDS:
+            if k in row:
+                try:
+                    values[k] = _parse(k, row[k])
+                except (TypeError, ValueError, OverflowError):
+                    raise InputFileError(f"{path}: row {i + 1}, column {k}: {value_text(row[k])} is not "
+                                         f"{'an' if _TYPES[k][0] in 'aeiou' else 'a'} {_TYPES[k]}") from None
+        records.append(MeasurementRecord(**values))
     return Measurements(records, header)

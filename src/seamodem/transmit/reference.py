@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError, InputFileError
+from ..errors import ConfigError, InputFileError, value_text
 
 __all__ = [
     "REFERENCE_KINDS",
@@ -109,8 +109,27 @@ class ReferenceWaveform:
     channel : int
         Template's channel (0-based).
     postamble_s : float
-        Packets bracketed by this reference: a second copy starts this long
-        after the first (start to start) [s]; 0 = single pings.
+        Packets bracketed by this reference: the postamble (train) starts this
+        long after the preamble (train) (first chirp to first chirp) [s]; 0 =
+        no postamble.
+    train_count : int
+        Chirps in the preamble train (1: a single preamble ping), each
+        ``train_spacing_s`` after the previous one.
+    train_spacing_s : float
+        Start-to-start spacing of the chirps in a train [s] (with
+        ``train_count`` > 1 or ``postamble_count`` > 1).
+    postamble_count : int
+        Chirps in the postamble train (0: as many as the preamble's when
+        ``postamble_s`` is set).
+
+    Examples
+    --------
+    A research packet: 4 chirps 0.25 s apart, 3 more 8.27 s later.
+
+    >>> ref = ReferenceWaveform(kind="lfm", f_low_hz=19e3, f_high_hz=29e3, duration_s=0.05, window="rect",
+    ...                         train_count=4, train_spacing_s=0.25, postamble_s=8.27, postamble_count=3)
+    >>> [(round(t, 2), role) for t, role, _ in ref.packet()][3:5]
+    [(0.75, 'preamble'), (8.27, 'postamble')]
     """
 
     kind: str
@@ -132,6 +151,9 @@ class ReferenceWaveform:
     stop_s: float = 0.0
     channel: int = 0
     postamble_s: float = 0.0
+    train_count: int = 1
+    train_spacing_s: float = 0.0
+    postamble_count: int = 0
 
     def __post_init__(self):
         if self.kind not in REFERENCE_KINDS:
@@ -170,8 +192,39 @@ class ReferenceWaveform:
             raise ConfigError("postamble_s", f"must be >= 0, got {self.postamble_s!r}")
         if self.postamble_s and self.kind != "template" and self.postamble_s <= self.duration_s:
             raise ConfigError("postamble_s", f"must exceed the reference's duration {self.duration_s:g} s, got {self.postamble_s!r}")
+        for name in ("train_count", "postamble_count"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 64):
+                raise ConfigError(name, f"must be an integer in 0 … 64, got {value_text(value)}")
+        if self.train_count < 1:
+            raise ConfigError("train_count", f"must be at least 1, got {self.train_count}")
+        if self.postamble_count and not self.postamble_s:
+            raise ConfigError("postamble_count", "needs postamble_s (where the postamble train starts)")
+        if not (isinstance(self.train_spacing_s, (int, float)) and math.isfinite(self.train_spacing_s)
+                and self.train_spacing_s >= 0):
+            raise ConfigError("train_spacing_s", f"must be >= 0, got {value_text(self.train_spacing_s)}")
+        if max(self.train_count, self.postamble_count) > 1:
+            if self.kind != "template" and self.train_spacing_s <= self.duration_s:
+                raise ConfigError("train_spacing_s", f"must exceed the reference's duration {self.duration_s:g} s "
+                                  f"for trains of several chirps, got {self.train_spacing_s!r}")
+            last_pre = (self.train_count - 1) * self.train_spacing_s
+            if self.postamble_s and self.postamble_s <= last_pre + self.duration_s:
+                raise ConfigError("postamble_s", f"must start after the preamble train ends "
+                                  f"({last_pre + self.duration_s:g} s), got {self.postamble_s!r}")
         if not self.name:
             object.__setattr__(self, "name", self.default_name())
+
+    def packet(self) -> list[tuple[float, str, int]]:
+        """Every chirp of one packet: (emission offset from the first chirp [s], role, position in its train).
+
+        Roles: "ping" (a lone ping: no train, no postamble), "preamble", "postamble".
+        """
+        n_post = (self.postamble_count or self.train_count) if self.postamble_s else 0
+        if self.train_count == 1 and not n_post:
+            return [(0.0, "ping", 0)]
+        out = [(i * self.train_spacing_s, "preamble", i) for i in range(self.train_count)]
+        out += [(self.postamble_s + i * self.train_spacing_s, "postamble", i) for i in range(n_post)]
+        return out
 
     def default_name(self) -> str:
         if self.kind == "pn":
@@ -199,8 +252,9 @@ class ReferenceWaveform:
             "template": ("file", "mat_variable", "sample_rate_hz", "start_s", "stop_s", "channel", "f_low_hz", "f_high_hz"),
         }[self.kind]
         out = {"kind": self.kind, "name": self.name, **{k: getattr(self, k) for k in keep}}
-        if self.postamble_s:
-            out["postamble_s"] = self.postamble_s
+        for key in ("postamble_s", "train_count", "train_spacing_s", "postamble_count"):
+            if getattr(self, key) != getattr(ReferenceWaveform, key):
+                out[key] = getattr(self, key)
         return out
 
     @classmethod
@@ -615,7 +669,13 @@ def load_references(spec: str) -> list[ReferenceWaveform]:
         for table in tables:
             if not isinstance(table, dict):
                 raise InputFileError(f"reference file {path}: each reference must be a table of parameters")
-            ref = ReferenceWaveform.from_dict(table)
+            try:
+                ref = ReferenceWaveform.from_dict(table)
+            except ConfigError as exc:
+                raise exc.in_file(f"reference file {path}") from None
+            except (TypeError, ValueError, OverflowError) as exc:  # a value of a type no check expected
+                raise ConfigError("reference", f"a value is of the wrong type ({exc})",
+                                  file=f"reference file {path}") from None
             if ref.kind == "template" and not Path(ref.file).is_absolute():
                 ref = dataclasses.replace(ref, file=str(path.parent / ref.file))
             refs.append(ref)
@@ -628,23 +688,23 @@ REFERENCE_SIDECAR_FORMAT = "seamodem.reference-sidecar/1"
 
 
 def emission_times(references: list[ReferenceWaveform], *, count: int, period_s: float, start_s: float) -> list[dict]:
-    """Every emission of a beacon schedule: reference i of n at start + k·period + i·period/n, its postamble after.
+    """Every emission of a beacon schedule: reference i of n at start + k·period + i·period/n, then the rest
+    of its packet (:meth:`ReferenceWaveform.packet`: train, postamble).
 
     Returns
     -------
     list of dict
         ``frame_index``, ``t_emit_s``, ``reference`` (name), ``role`` ("ping", "preamble", "postamble"),
-        sorted by time.
+        ``train_position`` (the chirp's place in its train), sorted by time.
     """
     out = []
     n = len(references)
     for k in range(count):
         for i, ref in enumerate(references):
             t = start_s + k * period_s + i * period_s / n
-            role = "preamble" if ref.postamble_s else "ping"
-            out.append({"frame_index": k, "t_emit_s": t, "reference": ref.name, "role": role})
-            if ref.postamble_s:
-                out.append({"frame_index": k, "t_emit_s": t + ref.postamble_s, "reference": ref.name, "role": "postamble"})
+            for offset, role, position in ref.packet():
+                out.append({"frame_index": k, "t_emit_s": t + offset, "reference": ref.name, "role": role,
+                            "train_position": position})
     return sorted(out, key=lambda e: e["t_emit_s"])
 
 
