@@ -48,6 +48,7 @@ __all__ = [
     "one_blas_thread",
     "receiver_front_end",
     "tone_fallback_sigma_mps",
+    "unmodelled_sigmas",
 ]
 
 _BLAS = None
@@ -192,6 +193,48 @@ def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *,
         return math.sqrt(sigma_tone**2 + gap**2 + sigma_bank**2)
     return math.sqrt(sigma_tone**2 + max(0.0, gap**2 - 9 * sigma_bank**2))
 
+
+#: radial acceleration a vehicle can have over a frame [m/s²]: an AUV's is below ~0.5 (circling at
+#: 15 m radius ~0.15); a fitted drift beyond it is phase wander (fading, a merged echo), not Doppler
+PLAUSIBLE_ACCEL_MPS2 = 0.5
+#: scale of the unmodelled terms against the raw observables (1: the analytic-signal argument alone)
+_K_FADE, _K_ACCEL, _K_MERGE = 1.0, 1.0, 1.0
+
+
+def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sound_speed_mps: float
+                      ) -> tuple[float, float]:
+    """σ terms [m/s], [s] of what the whole-frame fit of a path shows but does not model.
+
+    Parameters
+    ----------
+    wf : WholeFrameFit
+        The fit.
+    first : int
+        The direct path's index in it.
+    config : FrameConfig
+        The frame (carrier, duration).
+    sound_speed_mps : float
+        c [m/s].
+
+    Returns
+    -------
+    sigma_v : float
+        The Doppler's: the path's log-amplitude rate as a phase-rate error
+        (a fading or beating phasor: same scale, ``WholeFrameFit.amp_rate_hz``),
+        and the fitted drift beyond what a vehicle does
+        (:data:`PLAUSIBLE_ACCEL_MPS2`) over the frame [m/s].
+    sigma_tau : float
+        The arrival's: the path's spectral tilt as a delay and the scatter of
+        its segments' timings (an unresolved echo, ``WholeFrameFit.tilt_delay_s``
+        and ``delay_scatter_s``) [s].
+    """
+    c, f0, dur = sound_speed_mps, config.carrier_hz, config.frame_duration_s
+    amp = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
+    fade = _K_FADE * c / (2 * math.pi * f0) * amp
+    drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
+    tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
+    scatter = 0.0 if wf.delay_scatter_s is None else float(wf.delay_scatter_s[first])
+    return math.hypot(fade, drift), _K_MERGE * math.hypot(tilt, scatter)
 
 
 class BasebandBuffers:
@@ -378,8 +421,14 @@ class FrameMeasurer:
         sigma_bank = doppler.pop("sigma_bank")
         # the direct path's data-aided arrival over the frame; on decisions, only when its σ is the smaller
         # (a fit on decisions mostly wrong: 23 mm off, σ 29 mm, where the pilot's arrival was 1 mm off)
-        if timing is not None and (doppler["v_r_source"] == "whole_frame" or timing[1] < sigma_tau):
-            t_arr, sigma_tau = timing
+        if timing is not None:
+            # two arrivals of the same path (the pilot's, the whole frame's): a gap beyond 3 combined σ is
+            # a wrong path or peak taken by one of them, and neither says which: the σ of the one used
+            # covers it (as the tone's covers its gap to the bank)
+            excess = (timing[0] - t_arr) ** 2 - 9 * (timing[1] ** 2 + sigma_tau**2)
+            if doppler["v_r_source"] == "whole_frame" or timing[1] < sigma_tau:
+                t_arr, sigma_tau = timing
+            sigma_tau = math.sqrt(sigma_tau**2 + max(0.0, excess))
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
         else:
@@ -465,11 +514,16 @@ class FrameMeasurer:
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
             wf, first, source = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
+            sigma_v_un, sigma_tau_un = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c)
+            sigma = math.hypot(sigma, sigma_v_un)
+            # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
+            sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
-                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps)), \
-                (float(wf.delays_s[first]), float(wf.sigma_delay_s[first]) * inflation)
+                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
+                        v_r_drift_mps2=float(wf.accel_mps2[first])), \
+                (float(wf.delays_s[first]), math.hypot(float(wf.sigma_delay_s[first]) * inflation, sigma_tau_un))
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank, v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None

@@ -143,6 +143,11 @@ class MeasurementRecord:
     blanked_fraction : float
         Fraction of the frame's input samples zeroed as impulses; NaN with
         blanking off.
+    v_r_drift_mps2 : float
+        The direct path's fitted drift of v_r over the frame [m/s²] (whole-frame
+        fit; NaN without). Beyond what a vehicle does (|·| > 0.5 m/s²) it is
+        phase wander that is not Doppler (fading, a merged echo): ``sigma_v_r_mps``
+        then carries it.
     """
 
     frame_index: int
@@ -180,6 +185,7 @@ class MeasurementRecord:
     v_r_paths_spread_mps: float = math.nan
     n_paths: int = 0
     blanked_fraction: float = math.nan
+    v_r_drift_mps2: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)

@@ -74,6 +74,24 @@ class WholeFrameFit:
         data-aided timing, at least its CRLB over the reference symbols.
     n_reference : int
         Symbols used as the reference (known or confident).
+    amp_rate_hz : numpy.ndarray
+        RMS over the frame of the rate of each path's log-amplitude [1/s],
+        from a line and a parabola fitted to the segments' ln|Σz| (as their
+        phases), less what the noise gives it; 0 when the noise explains it.
+        A path that fades, or that an unresolved echo beats with, changes
+        amplitude: for a Rician or two-phasor sum the log-amplitude rate and
+        the phase-rate error (a Doppler error) have the same scale.
+    tilt_delay_s : numpy.ndarray
+        The path's spectral tilt as a delay [s]: ln(|z_upper| / |z_lower|) of
+        its upper and lower half bands over 2π times their centroids'
+        distance, less what the noise gives it. A merged echo b at Δ makes the
+        path's channel 1 + b e^{−j2πfΔ}: its log-amplitude slope and its
+        group-delay error (the arrival's bias) are the imaginary and real
+        parts of one complex number, Δ·b e/(1 + b e), of the same scale.
+    delay_scatter_s : numpy.ndarray
+        Deviation of the segments' data-aided timings about their mean, less
+        what the noise gives it [s]: an unresolved echo whose relative phase
+        moves over the frame pulls each segment's timing by its own amount.
     """
 
     delays_s: np.ndarray
@@ -85,6 +103,9 @@ class WholeFrameFit:
     es_n0: np.ndarray
     sigma_delay_s: np.ndarray
     n_reference: int
+    amp_rate_hz: np.ndarray | None = None
+    tilt_delay_s: np.ndarray | None = None
+    delay_scatter_s: np.ndarray | None = None
 
 
 def known_signal_velocity_crlb_mps(config: FrameConfig, es_n0, n_symbols: int, *, sound_speed_mps: float):
@@ -243,10 +264,13 @@ class _Segment:
         return period, _srrc_spectrum(self.band_hz, period, float(self.config.rolloff))
 
     def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float,
-               derivative: bool = False):
+               derivative: bool = False, half: int = 0):
         """Matched-filter outputs at ``instants_s`` of r with ``offset_hz`` (phase 0 at ``t_ref_s``) removed;
-        with ``derivative``, also their time derivative dy/dt [1/s] (the interpolating polynomial's)."""
+        with ``derivative``, also their time derivative dy/dt [1/s] (the interpolating polynomial's); with
+        ``half`` −1 or +1, the filter's lower or upper half band alone."""
         period, h = self._pulse(scale)
+        if half:
+            h = np.where(half * self.band_hz > 0, h, 0.0)
         x = r * np.exp(-2j * np.pi * offset_hz * (self.t_s - t_ref_s)) if offset_hz else r
         up = np.zeros(self.big, complex)
         up[self.band_big] = self._fft.fft(x, self.m)[self.band] * h
@@ -356,6 +380,7 @@ def fit_whole_frame(
         d_seg = np.real(dzs * np.conj(zs)) / (power * r2)
         w = power / counts
         d = float(np.sum(w * d_seg) / np.sum(w))
+        last_timing[p] = (d_seg, w)
         return d, math.sqrt(float(np.sum(w * (d_seg - d) ** 2)) / ((n_segments - 1) * float(np.sum(w))))
 
     def phase_fit(z, inst, p):
@@ -368,12 +393,15 @@ def fit_whole_frame(
         # the normal equations (3 × 3, times within ±D/2: well conditioned), their inverse the covariance's shape
         g_inv = np.linalg.inv(design.T @ (design * w[:, None]))
         coef = g_inv @ (design.T @ (w * phi))
+        last_phase[p] = (zs, ts, design, w, g_inv)
         resid = phi - design @ coef
         s2 = float(np.sum(w * resid**2) / (n_segments - 3))
         return coef, math.sqrt(max(s2 * g_inv[1, 1], 0.0))
 
     sigma_b = np.full(n_paths, math.inf)
     sigma_d = np.full(n_paths, math.inf)
+    last_phase: dict = {}
+    last_timing: dict = {}
     quarter = config.symbol_period_s / 4
     # SAGE: each sweep filters every path once, the others' fitted contributions removed. The
     # Doppler found moves the symbol instants, so a path, a lone one too, is filtered again in
@@ -413,6 +441,40 @@ def fit_whole_frame(
     # delay CRLB of a known signal of n symbols: 1/(2πβ√(2 n Es/N0)) (SPEC §6, with the whole frame's energy)
     crlb_d = 1.0 / (2 * np.pi * gabor_bandwidth_hz(config.symbol_rate_hz, config.rolloff)
                     * np.sqrt(2 * n_ref * np.maximum(es_n0, 1e-30)))
+    amp_rate = np.zeros(n_paths)
+    scatter = np.zeros(n_paths)
+    tilt = np.zeros(n_paths)
+    _, h_full = seg._pulse(1 + eps[0])
+    pos_band = seg.band_hz > 0
+    f_c = float(np.sum(seg.band_hz[pos_band] * h_full[pos_band] ** 2) / np.sum(h_full[pos_band] ** 2))
+    for p in range(n_paths):
+        r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
+        inst_p = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
+        strip = np.exp(-1j * _phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
+        z_half = [np.sum(seg.filter(r_p, inst_p, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
+                                    half=h) * strip) for h in (-1, 1)]
+        power = np.maximum(np.abs(z_half) ** 2, np.finfo(float).tiny)
+        # each half's sum carries about half the outputs' noise: var ln|z| = n·σ²/2 / (2|z|²)
+        var_ln = float(np.sum(n_ref * noise_var / 4 / power))
+        k = 1.0 / (2 * np.pi * 2 * f_c)
+        tilt[p] = k * math.sqrt(max(math.log(power[1] / power[0]) ** 2 / 4 - var_ln, 0.0))
+        zs, ts, design, w, g_inv = last_phase[p]
+        # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²)
+        var = counts * noise_var / (2 * np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny))
+        la = np.log(np.maximum(np.abs(zs), np.finfo(float).tiny))
+        wa = 1.0 / var
+        cov = np.linalg.inv(design.T @ (design * wa[:, None]))
+        a = cov @ (design.T @ (wa * la))
+        # mean square of a1 + 2 a2 t over t uniform in ±D/2: a1² + a2² D²/3, less its noise expectation
+        d2 = config.frame_duration_s**2 / 3
+        ms = a[1] ** 2 + a[2] ** 2 * d2 - (cov[1, 1] + cov[2, 2] * d2)
+        amp_rate[p] = math.sqrt(max(ms, 0.0))
+        d_seg, wt = last_timing[p]
+        dm = float(np.sum(wt * d_seg) / np.sum(wt))
+        spread2 = float(np.sum(wt * (d_seg - dm) ** 2) / np.sum(wt))
+        # the noise's share: (n − 1) σ_mean² for independent segments, σ_mean from the timing CRLB per segment
+        seg_crlb2 = float(crlb_d[p]) ** 2 * n_segments
+        scatter[p] = math.sqrt(max(spread2 - seg_crlb2 * (n_segments - 1) / n_segments, 0.0))
     order = np.argsort(delays)
     return WholeFrameFit(
         delays_s=delays[order],
@@ -424,4 +486,7 @@ def fit_whole_frame(
         es_n0=es_n0[order],
         sigma_delay_s=np.maximum(sigma_d, crlb_d)[order],
         n_reference=int(n_ref),
+        amp_rate_hz=amp_rate[order],
+        delay_scatter_s=scatter[order],
+        tilt_delay_s=tilt[order],
     )
