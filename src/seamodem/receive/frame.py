@@ -419,6 +419,9 @@ class FrameMeasurer:
         dec = demodulate(m, bb, t0_s, fs, config=self.config, pilot=self.pilot, settings=s, sent_payload=sent)
         doppler, timing = self._doppler(m, dec, bb, t0_s, fs, excess, snr_direct_db)
         sigma_bank = doppler.pop("sigma_bank")
+        # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
+        # sees the same channel
+        sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_unmodelled", 0.0))
         # the direct path's data-aided arrival over the frame; on decisions, only when its σ is the smaller
         # (a fit on decisions mostly wrong: 23 mm off, σ 29 mm, where the pilot's arrival was 1 mm off)
         if timing is not None:
@@ -481,12 +484,14 @@ class FrameMeasurer:
         """
         c = self.settings.sound_speed_mps
         v_tone = m.v_tone_ml_mps
-        sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c))
+        # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
+        sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
         fit = self._whole_frame(m, dec, bb, t0_s, fs) if dec is not None and self.settings.whole_frame_doppler else None
         inflation = 1.0
+        rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
         if fit is not None and fit[2] == "whole_frame_decisions":
             # decided symbols can be wrong in runs and pull the fit away: they bias every segment alike,
             # which the segments' scatter does not see (1 frame in 100 at 6–12 dB in the benchmark's deep
@@ -507,10 +512,17 @@ class FrameMeasurer:
                 grown = math.sqrt(sigma**2 + (v - m.pilot.v_mps) ** 2 + sigma_bank**2)
                 inflation = grown / sigma if sigma > 0 else 1.0
                 if math.isfinite(v_tone) and not grown < sigma_tone_gap:
-                    fit = None
+                    fit, rejected = None, (v, grown, fit)
             elif math.isfinite(v_tone) and not (abs(v - v_tone) <= 3 * math.hypot(grown, sigma_tone_gap)
                                                 and grown < sigma_tone_gap):
-                fit = None
+                fit, rejected = None, (v, grown, fit)
+        sigma_tau_rejected = 0.0
+        if rejected is not None:
+            sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c)[1]
+            # two independent estimates of the same speed further apart than 3 combined σ: one of them is
+            # wrong and the frame does not say which, so the one used (the tone) has a σ that covers the gap
+            gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
+            sigma_tone_gap = math.sqrt(sigma_tone_gap**2 + max(0.0, gap_fit2))
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
             wf, first, source = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
@@ -529,7 +541,7 @@ class FrameMeasurer:
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None
         return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank, v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
-                    n_paths=len(m.paths.delays_s)), None
+                    n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_rejected), None
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
         """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""

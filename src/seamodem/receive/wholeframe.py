@@ -146,6 +146,8 @@ _UPSAMPLE = 4
 #: sweeps contract (a delay step of 0.7σ is followed by one of 0.01σ), so the last step taken is the
 #: error left, within a tenth or so of it
 _STEP_DOPPLER, _STEP_DELAY = 0.25, 1.0
+#: sub-bands of a path's band whose amplitudes give its channel's tilt and curvature (``tilt_delay_s``)
+_N_BANDS = 4
 _TAPS = np.arange(-2, 4)  # the interpolator's sample offsets around a position
 
 
@@ -281,6 +283,29 @@ class _Segment:
         if not derivative:
             return y
         return y, dy * (self.fs * _UPSAMPLE)
+
+    def band_sums(self, r: np.ndarray, instants_s: np.ndarray, weights: np.ndarray, *, scale: float, offset_hz: float,
+                  t_ref_s: float, n_bands: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Σ_k w_k y_k of the matched filter restricted to each of ``n_bands`` equal-energy sub-bands of the
+        pulse, computed in the frequency domain (one FFT of r, the weights spread on the grid and one FFT):
+        (sums, their share of the full band's noise variance, the sub-bands' centroids [Hz]). The sums are
+        on the scale of :meth:`filter`'s outputs to within the interpolation's error."""
+        period, h = self._pulse(scale)
+        x = r * np.exp(-2j * np.pi * offset_hz * (self.t_s - t_ref_s)) if offset_hz else r
+        spec = self._fft.fft(x, self.m)[self.band] * h
+        pos = np.ascontiguousarray((instants_s - self.t0_s) * (self.fs * _UPSAMPLE), dtype=float)
+        grid = np.zeros(self.big, complex)
+        _spread_kernel(np.ascontiguousarray(np.conj(weights), dtype=complex), pos, _BASIS, int(_TAPS[0]), grid)
+        w_spec = self._fft.fft(grid)[self.band_big]
+        prod = spec * np.conj(w_spec) * (_UPSAMPLE / math.sqrt(period) / self.big)
+        energy = h**2 * np.abs(w_spec) ** 2
+        order = np.argsort(self.band_hz)
+        cum = np.cumsum(energy[order])
+        which = np.minimum((cum / cum[-1] * n_bands).astype(int), n_bands - 1)
+        sums = np.bincount(which, prod[order].real, n_bands) + 1j * np.bincount(which, prod[order].imag, n_bands)
+        e = np.bincount(which, energy[order], n_bands)
+        centroid = np.bincount(which, energy[order] * self.band_hz[order], n_bands) / np.maximum(e, 1e-300)
+        return sums, e / e.sum(), centroid
 
     def synthesize(self, symbols: np.ndarray, instants_s: np.ndarray, *, scale: float) -> np.ndarray:
         """Σ x_k √T' h(t_n − t_k) on the segment's grid, without the carrier phase."""
@@ -444,20 +469,7 @@ def fit_whole_frame(
     amp_rate = np.zeros(n_paths)
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
-    _, h_full = seg._pulse(1 + eps[0])
-    pos_band = seg.band_hz > 0
-    f_c = float(np.sum(seg.band_hz[pos_band] * h_full[pos_band] ** 2) / np.sum(h_full[pos_band] ** 2))
     for p in range(n_paths):
-        r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
-        inst_p = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
-        strip = np.exp(-1j * _phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
-        z_half = [np.sum(seg.filter(r_p, inst_p, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
-                                    half=h) * strip) for h in (-1, 1)]
-        power = np.maximum(np.abs(z_half) ** 2, np.finfo(float).tiny)
-        # each half's sum carries about half the outputs' noise: var ln|z| = n·σ²/2 / (2|z|²)
-        var_ln = float(np.sum(n_ref * noise_var / 4 / power))
-        k = 1.0 / (2 * np.pi * 2 * f_c)
-        tilt[p] = k * math.sqrt(max(math.log(power[1] / power[0]) ** 2 / 4 - var_ln, 0.0))
         zs, ts, design, w, g_inv = last_phase[p]
         # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²)
         var = counts * noise_var / (2 * np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny))
@@ -475,6 +487,29 @@ def fit_whole_frame(
         # the noise's share: (n − 1) σ_mean² for independent segments, σ_mean from the timing CRLB per segment
         seg_crlb2 = float(crlb_d[p]) ** 2 * n_segments
         scatter[p] = math.sqrt(max(spread2 - seg_crlb2 * (n_segments - 1) / n_segments, 0.0))
+    # the earliest path's channel across its band: ln|z| of 4 equal-energy sub-bands, a line and a parabola
+    # in f; the RMS of its slope over the band (less the noise's) as a delay: a merged echo b at Δ makes the
+    # channel 1 + b e^{−j2πfΔ}, whose log-amplitude slope and group-delay error (the arrival's bias) are the
+    # imaginary and real parts of one number (the curvature brings in the real part where the slope is 0)
+    p = int(np.argmin(delays))
+    r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
+    inst_p = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
+    strip = np.exp(-1j * _phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
+    zb, share, fb = seg.band_sums(r_p, inst_p, strip, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
+                                  n_bands=_N_BANDS)
+    power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
+    var = n_ref * noise_var * share / (2 * power)
+    fc = fb - np.sum(fb * share)
+    design_f = np.column_stack([np.ones(_N_BANDS), fc, fc**2])
+    cov = np.linalg.inv(design_f.T @ (design_f / var[:, None]))
+    a = cov @ (design_f.T @ (np.log(power) / 2 / var))
+    # the phase across the sub-bands: its slope is the fitted delay's (≈ 0 once converged, not counted), its
+    # curvature the group delay's dispersion, the derivative of the same complex number (its real part)
+    phi = np.unwrap(np.angle(zb))
+    b = cov @ (design_f.T @ (phi / var))
+    span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted)
+    ms = a[1] ** 2 + 4 * (a[2] ** 2 + b[2] ** 2) * span2 - (cov[1, 1] + 8 * cov[2, 2] * span2)
+    tilt[p] = math.sqrt(max(ms, 0.0)) / (2 * np.pi)
     order = np.argsort(delays)
     return WholeFrameFit(
         delays_s=delays[order],
