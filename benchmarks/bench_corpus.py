@@ -12,7 +12,8 @@ scored against the corpus's direct-path truth. Per family and per
 σ / RMS error (goals: ≥ 0.97 within 3σ, none beyond 6σ, median σ / RMS in
 [0.7, 1.5] per family). FER against in-band SNR per family, beside the same
 recordings with the echoes removed (single path). Results:
-benchmarks/results/bench_corpus.txt and the per-frame table bench_corpus_frames.csv.
+benchmarks/results/bench_corpus.txt and the per-frame table bench_corpus_frames.csv (every record
+column as rec_*).
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True) ->
                        sigma_v_r_mps=r.sigma_v_r_mps, v_r_source=r.v_r_source, crc_ok=bool(r.crc_ok),
                        snr_db=r.snr_db, v_r_tone_mps=r.v_r_tone_mps, v_r_bank_mps=r.v_r_bank_mps,
                        sigma_v_r_bank_mps=r.sigma_v_r_bank_mps)
+            row.update({f"rec_{k}": v for k, v in r.to_dict().items() if k not in ("payload_hex", "payload_text")})
         rows.append(row)
     return rows
 

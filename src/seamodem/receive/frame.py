@@ -567,7 +567,7 @@ class FrameMeasurer:
         try:
             wf: WholeFrameFit = fit_whole_frame(bb, fs, t0_s, config=cfg, symbols=symbols, reference=reference,
                                                 delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,
-                                                sound_speed_mps=c)
+                                                sound_speed_mps=c, direct_s=paths.first_s)
         except ValueError:  # too few trusted symbols
             return None
         first = int(np.argmin(np.abs(wf.delays_s - paths.first_s)))

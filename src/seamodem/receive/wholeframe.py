@@ -82,9 +82,10 @@ class WholeFrameFit:
         amplitude: for a Rician or two-phasor sum the log-amplitude rate and
         the phase-rate error (a Doppler error) have the same scale.
     tilt_delay_s : numpy.ndarray
-        The path's spectral tilt as a delay [s]: ln(|z_upper| / |z_lower|) of
-        its upper and lower half bands over 2π times their centroids'
-        distance, less what the noise gives it. A merged echo b at Δ makes the
+        The direct path's channel shape across its band as a delay [s] (0 for
+        the other paths): the RMS over the band of d ln|H|/df, with the phase's
+        curvature, over 2π, from 4 equal-energy sub-bands (line and parabola
+        in f), less what the noise gives it. A merged echo b at Δ makes the
         path's channel 1 + b e^{−j2πfΔ}: its log-amplitude slope and its
         group-delay error (the arrival's bias) are the imaginary and real
         parts of one complex number, Δ·b e/(1 + b e), of the same scale.
@@ -331,6 +332,7 @@ def fit_whole_frame(
     sound_speed_mps: float,
     n_segments: int = 32,
     sweeps: int = 4,
+    direct_s: float | None = None,
 ) -> WholeFrameFit:
     """Fit every path's gain, mean Doppler and drift over the whole frame.
 
@@ -354,6 +356,9 @@ def fit_whole_frame(
         path's Doppler by a quarter of its σ nor its delay by its σ (the first pass always
         has a second: it ran before the later paths were subtracted, and the
         delays are updated from the second pass on).
+    direct_s : float, optional
+        Arrival of the direct path [s]: the path nearest to it gets the
+        sub-band analysis of ``tilt_delay_s`` (default: the earliest path).
     """
     c = sound_speed_mps
     f0 = config.carrier_hz
@@ -491,7 +496,7 @@ def fit_whole_frame(
     # in f; the RMS of its slope over the band (less the noise's) as a delay: a merged echo b at Δ makes the
     # channel 1 + b e^{−j2πfΔ}, whose log-amplitude slope and group-delay error (the arrival's bias) are the
     # imaginary and real parts of one number (the curvature brings in the real part where the slope is 0)
-    p = int(np.argmin(delays))
+    p = int(np.argmin(delays if direct_s is None else np.abs(delays - direct_s)))
     r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
     inst_p = _instants(config, delays[p], eps[p], beta[p])[ref_idx]
     strip = np.exp(-1j * _phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
