@@ -85,12 +85,18 @@ class MeasurementRecord:
     detection_rho : float
         Normalised pilot correlation in [0, 1].
     sigma_range_m : float
-        Std of range_m from the delay CRLB at the measured SNR [m].
+        Std of range_m [m]: the whole-frame timing's deviation (else the delay
+        CRLB at the direct path's share of the SNR), with what the frame shows
+        unmodelled (the direct path's channel shape across its band, its
+        segments' timing scatter, the gap between the pilot's and the whole
+        frame's arrivals beyond 3 combined σ).
     sigma_v_r_mps : float
         Std of v_r_mps [m/s]: whole-frame fit, the deviation of its segments'
-        phases, at least the known-signal CRLB; tone, its CRLB at the measured
-        C/N0, inflated by its disagreement with the pilot bank when that
-        exceeds 3 of the bank's σ.
+        phases, at least the known-signal CRLB, with the direct path's
+        log-amplitude rate (fading, a beating echo), a drift beyond 0.5 m/s²
+        and its gap to the pilot bank beyond 3 combined σ; tone, its CRLB at
+        the measured C/N0, inflated by its disagreement with the pilot bank
+        (and with a fit on decisions set aside) when that exceeds 3 combined σ.
     sigma_v_r_bank_mps : float
         Std of v_r_bank_mps from the pilot-Doppler CRLB at the measured SNR [m/s].
     tone_c_n0_dbhz : float
