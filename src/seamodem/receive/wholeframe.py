@@ -503,18 +503,20 @@ def fit_whole_frame(
     zb, share, fb = seg.band_sums(r_p, inst_p, strip, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
                                   n_bands=_N_BANDS)
     power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
-    var = n_ref * noise_var * share / (2 * power)
+    # no sub-band without energy, nor one without noise (a noiseless fit): each ln|z| at least 1e-12 of variance
+    var = np.maximum(n_ref * noise_var * share / (2 * power), 1e-12)
     fc = fb - np.sum(fb * share)
-    design_f = np.column_stack([np.ones(_N_BANDS), fc, fc**2])
+    span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted) [Hz²]
+    u = fc / math.sqrt(span2)  # in units of its RMS: the normal equations well conditioned
+    design_f = np.column_stack([np.ones(_N_BANDS), u, u**2])
     cov = np.linalg.inv(design_f.T @ (design_f / var[:, None]))
     a = cov @ (design_f.T @ (np.log(power) / 2 / var))
     # the phase across the sub-bands: its slope is the fitted delay's (≈ 0 once converged, not counted), its
     # curvature the group delay's dispersion, the derivative of the same complex number (its real part)
     phi = np.unwrap(np.angle(zb))
     b = cov @ (design_f.T @ (phi / var))
-    span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted)
-    ms = a[1] ** 2 + 4 * (a[2] ** 2 + b[2] ** 2) * span2 - (cov[1, 1] + 8 * cov[2, 2] * span2)
-    tilt[p] = math.sqrt(max(ms, 0.0)) / (2 * np.pi)
+    ms = (a[1] ** 2 + 4 * (a[2] ** 2 + b[2] ** 2) - (cov[1, 1] + 8 * cov[2, 2])) / span2
+    tilt[p] = math.sqrt(ms) / (2 * np.pi) if math.isfinite(ms) and ms > 0 else 0.0
     order = np.argsort(delays)
     return WholeFrameFit(
         delays_s=delays[order],
