@@ -224,17 +224,16 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
         and the fitted drift beyond what a vehicle does
         (:data:`PLAUSIBLE_ACCEL_MPS2`) over the frame [m/s].
     sigma_tau : float
-        The arrival's: the path's spectral tilt as a delay and the scatter of
-        its segments' timings (an unresolved echo, ``WholeFrameFit.tilt_delay_s``
-        and ``delay_scatter_s``) [s].
+        The arrival's: the direct path's channel shape across its band as a
+        delay (an unresolved echo, ``WholeFrameFit.tilt_delay_s``) [s].
     """
     c, f0, dur = sound_speed_mps, config.carrier_hz, config.frame_duration_s
     amp = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
     fade = _K_FADE * c / (2 * math.pi * f0) * amp
     drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
+    # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
     tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
-    scatter = 0.0 if wf.delay_scatter_s is None else float(wf.delay_scatter_s[first])
-    return math.hypot(fade, drift), _K_MERGE * math.hypot(tilt, scatter)
+    return math.hypot(fade, drift), _K_MERGE * tilt
 
 
 class BasebandBuffers:
