@@ -12,7 +12,8 @@ scored against the corpus's direct-path truth. Per family and per
 σ / RMS error (goals: ≥ 0.97 within 3σ, none beyond 6σ, median σ / RMS in
 [0.7, 1.5] per family). FER against in-band SNR per family, beside the same
 recordings with the echoes removed (single path). Results:
-benchmarks/results/bench_corpus.txt and the per-frame table bench_corpus_frames.csv.
+benchmarks/results/bench_corpus.txt and the per-frame table bench_corpus_frames.csv (every record
+column as rec_*).
 """
 
 from __future__ import annotations

@@ -165,6 +165,9 @@ def _open_mat5(path: Path, variable: str | None) -> MatFile:
     except (ValueError, TypeError, OSError, NotImplementedError, IndexError, KeyError,
             scipy.io.matlab.MatReadError) as exc:
         raise InputFileError(f"{path} is not a readable MATLAB file: {str(exc).splitlines()[0] if str(exc) else exc!r}") from None
+    except MemoryError:  # a damaged header declaring an array far larger than the file
+        raise InputFileError(f"{path} is not a readable MATLAB file: it declares an array larger than memory "
+                             f"(the file is {path.stat().st_size} bytes: damaged?)") from None
     data = {k: v for k, v in m.items() if not k.startswith("__")}
     numeric = {k for k, v in data.items() if isinstance(v, np.ndarray) and np.issubdtype(v.dtype, np.number)}
     name = _choose_variable({k: np.shape(v) for k, v in data.items()}, numeric, path, variable)

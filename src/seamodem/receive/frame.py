@@ -48,6 +48,7 @@ __all__ = [
     "one_blas_thread",
     "receiver_front_end",
     "tone_fallback_sigma_mps",
+    "unmodelled_sigmas",
 ]
 
 _BLAS = None
@@ -192,6 +193,47 @@ def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *,
         return math.sqrt(sigma_tone**2 + gap**2 + sigma_bank**2)
     return math.sqrt(sigma_tone**2 + max(0.0, gap**2 - 9 * sigma_bank**2))
 
+
+#: radial acceleration a vehicle can have over a frame [m/s²]: an AUV's is below ~0.5 (circling at
+#: 15 m radius ~0.15); a fitted drift beyond it is phase wander (fading, a merged echo), not Doppler
+PLAUSIBLE_ACCEL_MPS2 = 0.5
+#: scale of the unmodelled terms against the raw observables (1: the analytic-signal argument alone)
+_K_FADE, _K_ACCEL, _K_MERGE = 1.0, 1.0, 1.0
+
+
+def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sound_speed_mps: float
+                      ) -> tuple[float, float]:
+    """σ terms [m/s], [s] of what the whole-frame fit of a path shows but does not model.
+
+    Parameters
+    ----------
+    wf : WholeFrameFit
+        The fit.
+    first : int
+        The direct path's index in it.
+    config : FrameConfig
+        The frame (carrier, duration).
+    sound_speed_mps : float
+        c [m/s].
+
+    Returns
+    -------
+    sigma_v : float
+        The Doppler's: the path's log-amplitude rate as a phase-rate error
+        (a fading or beating phasor: same scale, ``WholeFrameFit.amp_rate_hz``),
+        and the fitted drift beyond what a vehicle does
+        (:data:`PLAUSIBLE_ACCEL_MPS2`) over the frame [m/s].
+    sigma_tau : float
+        The arrival's: the direct path's channel shape across its band as a
+        delay (an unresolved echo, ``WholeFrameFit.tilt_delay_s``) [s].
+    """
+    c, f0, dur = sound_speed_mps, config.carrier_hz, config.frame_duration_s
+    amp = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
+    fade = _K_FADE * c / (2 * math.pi * f0) * amp
+    drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
+    # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
+    tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
+    return math.hypot(fade, drift), _K_MERGE * tilt
 
 
 class BasebandBuffers:
@@ -376,10 +418,19 @@ class FrameMeasurer:
         dec = demodulate(m, bb, t0_s, fs, config=self.config, pilot=self.pilot, settings=s, sent_payload=sent)
         doppler, timing = self._doppler(m, dec, bb, t0_s, fs, excess, snr_direct_db)
         sigma_bank = doppler.pop("sigma_bank")
+        # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
+        # sees the same channel
+        sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_unmodelled", 0.0))
         # the direct path's data-aided arrival over the frame; on decisions, only when its σ is the smaller
         # (a fit on decisions mostly wrong: 23 mm off, σ 29 mm, where the pilot's arrival was 1 mm off)
-        if timing is not None and (doppler["v_r_source"] == "whole_frame" or timing[1] < sigma_tau):
-            t_arr, sigma_tau = timing
+        if timing is not None:
+            # two arrivals of the same path (the pilot's, the whole frame's): a gap beyond 3 combined σ is
+            # a wrong path or peak taken by one of them, and neither says which: the σ of the one used
+            # covers it (as the tone's covers its gap to the bank)
+            excess = (timing[0] - t_arr) ** 2 - 9 * (timing[1] ** 2 + sigma_tau**2)
+            if doppler["v_r_source"] == "whole_frame" or timing[1] < sigma_tau:
+                t_arr, sigma_tau = timing
+            sigma_tau = math.sqrt(sigma_tau**2 + max(0.0, excess))
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
         else:
@@ -432,12 +483,14 @@ class FrameMeasurer:
         """
         c = self.settings.sound_speed_mps
         v_tone = m.v_tone_ml_mps
-        sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c))
+        # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
+        sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
         fit = self._whole_frame(m, dec, bb, t0_s, fs) if dec is not None and self.settings.whole_frame_doppler else None
         inflation = 1.0
+        rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
         if fit is not None and fit[2] == "whole_frame_decisions":
             # decided symbols can be wrong in runs and pull the fit away: they bias every segment alike,
             # which the segments' scatter does not see (1 frame in 100 at 6–12 dB in the benchmark's deep
@@ -458,24 +511,36 @@ class FrameMeasurer:
                 grown = math.sqrt(sigma**2 + (v - m.pilot.v_mps) ** 2 + sigma_bank**2)
                 inflation = grown / sigma if sigma > 0 else 1.0
                 if math.isfinite(v_tone) and not grown < sigma_tone_gap:
-                    fit = None
+                    fit, rejected = None, (v, grown, fit)
             elif math.isfinite(v_tone) and not (abs(v - v_tone) <= 3 * math.hypot(grown, sigma_tone_gap)
                                                 and grown < sigma_tone_gap):
-                fit = None
+                fit, rejected = None, (v, grown, fit)
+        sigma_tau_rejected = 0.0
+        if rejected is not None:
+            sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c)[1]
+            # two independent estimates of the same speed further apart than 3 combined σ: one of them is
+            # wrong and the frame does not say which, so the one used (the tone) has a σ that covers the gap
+            gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
+            sigma_tone_gap = math.sqrt(sigma_tone_gap**2 + max(0.0, gap_fit2))
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
             wf, first, source = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
+            sigma_v_un, sigma_tau_un = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c)
+            sigma = math.hypot(sigma, sigma_v_un)
+            # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
+            sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
-                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps)), \
-                (float(wf.delays_s[first]), float(wf.sigma_delay_s[first]) * inflation)
+                        v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
+                        v_r_drift_mps2=float(wf.accel_mps2[first])), \
+                (float(wf.delays_s[first]), math.hypot(float(wf.sigma_delay_s[first]) * inflation, sigma_tau_un))
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank, v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None
         return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank, v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
-                    n_paths=len(m.paths.delays_s)), None
+                    n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_rejected), None
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
         """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""
@@ -501,7 +566,7 @@ class FrameMeasurer:
         try:
             wf: WholeFrameFit = fit_whole_frame(bb, fs, t0_s, config=cfg, symbols=symbols, reference=reference,
                                                 delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,
-                                                sound_speed_mps=c)
+                                                sound_speed_mps=c, direct_s=paths.first_s)
         except ValueError:  # too few trusted symbols
             return None
         first = int(np.argmin(np.abs(wf.delays_s - paths.first_s)))

@@ -85,12 +85,18 @@ class MeasurementRecord:
     detection_rho : float
         Normalised pilot correlation in [0, 1].
     sigma_range_m : float
-        Std of range_m from the delay CRLB at the measured SNR [m].
+        Std of range_m [m]: the whole-frame timing's deviation (else the delay
+        CRLB at the direct path's share of the SNR), with what the frame shows
+        unmodelled (the direct path's channel shape across its band, its
+        segments' timing scatter, the gap between the pilot's and the whole
+        frame's arrivals beyond 3 combined σ).
     sigma_v_r_mps : float
         Std of v_r_mps [m/s]: whole-frame fit, the deviation of its segments'
-        phases, at least the known-signal CRLB; tone, its CRLB at the measured
-        C/N0, inflated by its disagreement with the pilot bank when that
-        exceeds 3 of the bank's σ.
+        phases, at least the known-signal CRLB, with the direct path's
+        log-amplitude rate (fading, a beating echo), a drift beyond 0.5 m/s²
+        and its gap to the pilot bank beyond 3 combined σ; tone, its CRLB at
+        the measured C/N0, inflated by its disagreement with the pilot bank
+        (and with a fit on decisions set aside) when that exceeds 3 combined σ.
     sigma_v_r_bank_mps : float
         Std of v_r_bank_mps from the pilot-Doppler CRLB at the measured SNR [m/s].
     tone_c_n0_dbhz : float
@@ -145,6 +151,11 @@ class MeasurementRecord:
     blanked_fraction : float
         Fraction of the frame's input samples zeroed as impulses; NaN with
         blanking off.
+    v_r_drift_mps2 : float
+        The direct path's fitted drift of v_r over the frame [m/s²] (whole-frame
+        fit; NaN without). Beyond what a vehicle does (|·| > 0.5 m/s²) it is
+        phase wander that is not Doppler (fading, a merged echo): ``sigma_v_r_mps``
+        then carries it.
     """
 
     frame_index: int
@@ -182,6 +193,7 @@ class MeasurementRecord:
     v_r_paths_spread_mps: float = math.nan
     n_paths: int = 0
     blanked_fraction: float = math.nan
+    v_r_drift_mps2: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
