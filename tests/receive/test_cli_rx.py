@@ -293,3 +293,26 @@ def test_plot_folder_is_created_and_channel_numbering_is_named(beacon, tmp_path,
     err = _fail(capsys, ["rx", str(stereo), "--config", str(beacon[0] / "delayed.json"), "--channel", "2", "-o",
                          str(tmp_path / "s.csv")], "channel 2 does not exist")
     assert "numbered from 0 (0 to 1)" in err
+
+
+def test_a_mat_frame_recording_takes_its_rate_and_variable_from_the_options(tmp_path, capsys):
+    """A frame recording saved as .mat (field recorders' way) without a rate: --sample-rate and --mat-variable
+    reach it, as with --reference (they were refused: 'only with --reference')."""
+    import shutil
+
+    import pandas as pd
+    import soundfile
+    from scipy.io import savemat
+
+    wav = tmp_path / "b.wav"
+    assert main(["tx", "--count", "2", "--period", "1", "-o", str(wav), "-q"]) == 0
+    x, fs = soundfile.read(wav)
+    savemat(tmp_path / "rec.mat", {"hydrophone": x[:, None]})
+    shutil.copy(tmp_path / "b.json", tmp_path / "rec.json")
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(tmp_path / "rec.mat"), "-o", str(out), "-q"]) == 2  # no rate in the file
+    assert "sample-rate" in capsys.readouterr().err
+    assert main(["rx", str(tmp_path / "rec.mat"), "--sample-rate", str(fs), "--mat-variable", "hydrophone",
+                 "-o", str(out), "-q"]) == 0
+    table = pd.read_csv(out)
+    assert len(table) == 2 and table["crc_ok"].all()

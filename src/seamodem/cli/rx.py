@@ -229,7 +229,9 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
     from ..io.sidecar import sidecar_path, sidecar_payloads, sidecar_pilot_bits
     from ..io.source import open_recording
 
-    source = open_recording(recording)
+    # a .mat recording: its variable and, when it holds none, its rate (the same options as --reference)
+    source = open_recording(recording, mat_variable=getattr(args, "mat_variable", None),
+                            sample_rate_hz=getattr(args, "sample_rate", None))
     source.one_channel(0 if args.array else args.channel)
     sidecar, own = _sidecar_for(args.config, recording)
     config = config_from_args(args, config_file=str(sidecar_path(recording)) if own else None)

@@ -55,9 +55,9 @@ def add_reference_options(p: argparse.ArgumentParser) -> None:
     def run(args: argparse.Namespace) -> int:
         if args.reference:
             return run_reference(args)
-        for name in ("mat_variable", "sample_rate", "all_channels", "max_accel"):
+        for name in ("all_channels", "max_accel"):
             if getattr(args, name) is not None and getattr(args, name) is not False:  # 0 is a value given
-                raise SeamodemError(f"{name.replace('_', '-')}: only with --reference (frame recordings are read as audio files)")
+                raise SeamodemError(f"{name.replace('_', '-')}: only with --reference")
         return frames_run(args)
 
     p.set_defaults(run=run)
