@@ -15,12 +15,8 @@ from ..config import FrameConfig, get_preset, load_config
 from ..errors import SeamodemError
 from ..io.files import check_writable
 
-__all__ = ["DEFAULT_SOUND_SPEED_MPS", "sound_speed", "sound_speed_words", "add_config_options", "config_from_args", "command_line", "emit_schedule",
+__all__ = ["sound_speed", "sound_speed_words", "add_config_options", "config_from_args", "command_line", "emit_schedule",
            "output_path", "reported_warnings"]
-
-#: c when neither --sound-speed nor a sidecar gives one [m/s]
-DEFAULT_SOUND_SPEED_MPS = 1500.0
-
 
 def sound_speed(args, sidecar: dict | None) -> float:
     """c for every receiver mode: --sound-speed, else the recording's sidecar, else 1500 m/s.

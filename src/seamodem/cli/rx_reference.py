@@ -96,7 +96,8 @@ def _with_template_options(ref, args):
 
 
 def _recording_sidecar(recording: Path) -> dict | None:
-    """The recording's sidecar (``REC.json``, any seamodem format), for its sound speed; None when absent."""
+    """The recording's sidecar (``REC.json``, any seamodem format: its sound speed, and with
+    :func:`_own_sidecar` its emissions); None when absent or unreadable."""
     path = recording.with_suffix(".json")
     if path == recording or not path.is_file():
         return None
@@ -107,17 +108,11 @@ def _recording_sidecar(recording: Path) -> dict | None:
     return data if isinstance(data, dict) else None
 
 
-def _own_sidecar(recording: Path) -> dict | None:
+def _own_sidecar(side: dict | None) -> dict | None:
+    """The recording's sidecar when it is a reference beacon's (``seamodem tx --reference``, then ``channel``)."""
     from ..transmit.reference import REFERENCE_SIDECAR_FORMAT
 
-    path = recording.with_suffix(".json")
-    if not path.is_file() or path == recording:
-        return None
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        return None
-    return data if isinstance(data, dict) and data.get("format") == REFERENCE_SIDECAR_FORMAT else None
+    return side if side is not None and side.get("format") == REFERENCE_SIDECAR_FORMAT else None
 
 
 def write_reference_records(path: Path, records: list, metadata: dict) -> int:
@@ -147,9 +142,10 @@ def run_reference(args: argparse.Namespace) -> int:
     from ..receive.settings import ReferenceSettings
 
     recording = Path(args.recording[0])
+    recording_side = _recording_sidecar(recording)
     try:
         settings = ReferenceSettings(
-            sound_speed_mps=sound_speed(args, _recording_sidecar(recording)),
+            sound_speed_mps=sound_speed(args, recording_side),
             clock_offset_s=args.clock_offset, turnaround_s=args.turnaround, v_max_mps=args.v_max,
             false_alarms_per_hour=args.false_alarms_per_hour,
             **({} if args.max_accel is None else {"max_accel_mps2": args.max_accel}),
@@ -178,7 +174,7 @@ def run_reference(args: argparse.Namespace) -> int:
     if args.mat_variable and not is_mat(recording) and not any(
             r.kind == "template" and is_mat(r.file) for r in references):
         raise SeamodemError(f"mat-variable: {recording} is not a .mat file, nor is any template")
-    sidecar = _own_sidecar(recording)
+    sidecar = _own_sidecar(recording_side)
     c = settings.sound_speed_mps
     emissions = _reference_emissions(args, sidecar, references)
 
