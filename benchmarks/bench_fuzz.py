@@ -26,7 +26,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "io"))
 
-from test_fuzz_readers import READERS, SIZES, WRONG, damage  # noqa: E402
+from test_fuzz_readers import READERS, SIZES, WRONG, damaged_copy, message_defect  # noqa: E402
 
 from seamodem.errors import SeamodemError  # noqa: E402
 
@@ -53,23 +53,15 @@ def random_ops(rng: np.random.Generator) -> list[tuple]:
 
 
 def outcome(name: str, tmp: Path, ops) -> tuple[str, str]:
-    fname, make, read = READERS[name]
-    original = tmp / ("orig_" + fname)
-    if not original.exists():
-        make(original)
-    target = tmp / fname
-    target.write_bytes(damage(original.read_bytes(), ops))
-    side = original.with_name(original.name + ".json")
-    if side.exists():
-        target.with_name(target.name + ".json").write_bytes(side.read_bytes())
+    target = damaged_copy(name, tmp, ops)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            read(target)
+            READERS[name][2](target)
         except SeamodemError as exc:
-            msg = str(exc)
-            if "\n" in msg or target.name not in msg or len(msg) >= 400:
-                return "defect", f"bad message ({type(exc).__name__}): {msg[:160]!r}"
+            problem = message_defect(str(exc), target)
+            if problem is not None:
+                return "defect", f"bad message ({type(exc).__name__}): {problem[:160]}"
             return "refused", ""
         except Exception as exc:  # noqa: BLE001 - what the benchmark counts
             return "defect", f"{type(exc).__name__}: {str(exc)[:160]}"

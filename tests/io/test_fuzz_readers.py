@@ -29,8 +29,6 @@ EXAMPLES = int(os.environ.get("SEAMODEM_FUZZ_EXAMPLES", "120"))
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=not os.environ.get("SEAMODEM_FUZZ_RANDOM"),
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 FS = 48000
-#: inputs tried per reader in this run, for benchmarks/bench_fuzz.py
-TRIED: dict[str, int] = {}
 
 
 # --- valid files of every kind ---------------------------------------------------------------------------------
@@ -210,19 +208,35 @@ def damage(data: bytes, ops) -> bytes:
     return bytes(b)
 
 
-def check_reader(name: str, tmp: Path, ops) -> None:
-    """The property: read, or one SeamodemError line naming the file."""
-    fname, make, read = READERS[name]
+def damaged_copy(name: str, tmp: Path, ops) -> Path:
+    """The reader's valid file (made once in ``tmp``) damaged by ``ops``; a sidecar beside it stays intact."""
+    fname, make, _ = READERS[name]
     original = tmp / ("orig_" + fname)
     if not original.exists():
         make(original)
     target = tmp / fname
     target.write_bytes(damage(original.read_bytes(), ops))
-    for side in (".json",):  # a damaged measurement file keeps its (intact) sidecar
-        src_side = original.with_name(original.name + side)
-        if src_side.exists():
-            target.with_name(target.name + side).write_bytes(src_side.read_bytes())
-    TRIED[name] = TRIED.get(name, 0) + 1
+    side = original.with_name(original.name + ".json")
+    if side.exists():
+        target.with_name(target.name + ".json").write_bytes(side.read_bytes())
+    return target
+
+
+def message_defect(msg: str, target: Path) -> str | None:
+    """What is wrong with an error message about ``target``, or None: one line, naming the file, short."""
+    if "\n" in msg:
+        return f"message on several lines: {msg!r}"
+    if target.name not in msg:
+        return f"message does not name the file: {msg!r}"
+    if len(msg) >= 400:
+        return f"message too long ({len(msg)} chars): {msg[:200]!r}..."
+    return None
+
+
+def check_reader(name: str, tmp: Path, ops) -> None:
+    """The property: read, or one SeamodemError line naming the file."""
+    target = damaged_copy(name, tmp, ops)
+    read = READERS[name][2]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if not ops:
@@ -231,10 +245,8 @@ def check_reader(name: str, tmp: Path, ops) -> None:
         try:
             read(target)
         except SeamodemError as exc:
-            msg = str(exc)
-            assert "\n" not in msg, f"{name}: message on several lines: {msg!r}"
-            assert target.name in msg, f"{name}: message does not name the file: {msg!r}"
-            assert len(msg) < 400, f"{name}: message too long ({len(msg)} chars): {msg[:200]!r}..."
+            problem = message_defect(str(exc), target)
+            assert problem is None, f"{name}: {problem}"
         except Exception as exc:  # noqa: BLE001 - the defect this test looks for
             raise AssertionError(f"{name}: {type(exc).__name__} escaped the reader: {exc}") from exc
 
