@@ -48,6 +48,16 @@ def _top_level_imports(tree: ast.Module, *, module_level: bool = True):
             stack.extend(node.body)
 
 
+def _absolute(node: ast.ImportFrom, package: str) -> str:
+    """The module a ``from ... import`` statement in ``package`` reads from, made absolute."""
+    base = node.module or ""
+    if node.level:
+        anchor = package.split(".")
+        anchor = anchor[: len(anchor) - node.level + 1]
+        base = ".".join(anchor + ([base] if base else []))
+    return base
+
+
 def import_graph(*, module_level: bool = True) -> dict[str, set[str]]:
     """seamodem module → seamodem modules it imports at module level (with the packages that implies)."""
     files = {_module_name(p): p for p in ROOT.rglob("*.py")}
@@ -59,11 +69,7 @@ def import_graph(*, module_level: bool = True) -> dict[str, set[str]]:
             if isinstance(node, ast.Import):
                 bases = [a.name for a in node.names]
             else:
-                base = node.module or ""
-                if node.level:
-                    anchor = package.split(".")
-                    anchor = anchor[: len(anchor) - node.level + 1]
-                    base = ".".join(anchor + ([base] if base else []))
+                base = _absolute(node, package)
                 bases = [base] + [f"{base}.{a.name}" for a in node.names]
             for target in bases:
                 if target not in files:
@@ -177,11 +183,7 @@ def _imported_names(module_level: bool = False):
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
         for node in _top_level_imports(ast.parse(path.read_text(encoding="utf-8")), module_level=module_level):
             if isinstance(node, ast.ImportFrom):
-                base = node.module or ""
-                if node.level:
-                    anchor = package.split(".")
-                    anchor = anchor[: len(anchor) - node.level + 1]
-                    base = ".".join(anchor + ([base] if base else []))
+                base = _absolute(node, package)
                 for alias in node.names:
                     yield name, base, alias.name, files
 
