@@ -146,19 +146,17 @@ def fit_packet(chirps: list[tuple[int, object]], *, sound_speed_mps: float, max_
     g = fits[0].ridge_slope_s
     var_e1 = (max_accel_mps2 / sound_speed_mps) ** 2 / 3
     free = [0, 1, 2] if var_e1 > 0 else [0, 1]  # max_accel 0 states a constant speed: ε1 = 0
-    w_e = 1 / se**2
-    eps0 = float(np.sum(w_e * e) / np.sum(w_e))
-    if T.max() - T.min() > 0:  # start from the scale of the two chirps farthest apart
-        a, b = int(np.argmin(T)), int(np.argmax(T))
-        eps0 = float((T[b] - T[a]) / (r[b] - r[a]) - 1)
+    # start from the scale of the two chirps farthest apart (distinct slots: distinct emission offsets)
+    a, b = int(np.argmin(T)), int(np.argmax(T))
+    eps0 = float((T[b] - T[a]) / (r[b] - r[a]) - 1)
+    basis = np.column_stack([np.zeros_like(T), np.ones_like(T), T])  # ε(T_j) = basis_j · (t0, ε0, ε1)
     p = np.array([float(np.mean(r - T / (1 + eps0) - g * eps0)), eps0, 0.0])
     for _ in range(8):
         t0, eps0, eps1 = p
         q = 1 + eps0
         model_r = t0 + T / q - eps1 * T**2 / (2 * q**2) + g * (eps0 + eps1 * T)
         jr = np.column_stack([np.ones_like(T), -T / q**2 + eps1 * T**2 / q**3 + g, -T**2 / (2 * q**2) + g * T])
-        je = np.column_stack([np.zeros_like(T), np.ones_like(T), T])
-        J = np.vstack([jr / sr[:, None], je / se[:, None]])
+        J = np.vstack([jr / sr[:, None], basis / se[:, None]])
         res = np.concatenate([(r - model_r) / sr, (e - (eps0 + eps1 * T)) / se])
         if var_e1 > 0:  # the acceleration prior as one more observation of ε1 (= 0)
             J = np.vstack([J, [0.0, 0.0, 1 / math.sqrt(var_e1)]])
@@ -174,7 +172,6 @@ def fit_packet(chirps: list[tuple[int, object]], *, sound_speed_mps: float, max_
     cov[np.ix_(free, free)] = np.linalg.inv(info)
     t0, eps0, eps1 = p
     eps_j = eps0 + eps1 * T
-    basis = np.column_stack([np.zeros_like(T), np.ones_like(T), T])
     var_eps_j = np.einsum("ij,jk,ik->i", basis, cov, basis)
     t_j = r - g * eps_j
     sigma_t = np.sqrt(sr**2 + g**2 * var_eps_j)
@@ -189,8 +186,9 @@ def assemble_packets(found: list, *, eps_max: float, max_accel_mps2: float, soun
     Detections of references with a single ping are left as they are. For the others: ``role`` and
     ``train_position`` from the slot, ``offset_s`` (emission offset from the packet's first chirp), the
     packet's mean ε and its σ (``eps_pair``, ``sigma_eps_pair``), its ε at the chirp (``eps_chirp``,
-    ``sigma_eps_chirp``), and the arrival at that ε (``t_pair_s``, ``sigma_t_pair_s``). A packet whose declared postamble (or, with no postamble, whose train)
-    is not complete is reported once per reference by a :class:`PacketWarning` naming it.
+    ``sigma_eps_chirp``), and the arrival at that ε (``t_pair_s``, ``sigma_t_pair_s``). Packets whose
+    declared postamble (or, with no postamble, whose train) is not complete are reported once per
+    reference by a :class:`PacketWarning` naming it.
     """
     by_ref: dict[str, list] = {}
     for f in found:
