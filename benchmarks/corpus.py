@@ -165,8 +165,8 @@ def path_gain(sc: Scenario, path: str, length_m: float, direct_m: float) -> floa
 
 def reception_time(sc: Scenario, t_emit: float, path: str = "D") -> float:
     """Reception time of a signal instant emitted at t_emit along a path (fixed point on t − τ(t) = t_emit)."""
-    t = t_emit + float(path_delay(sc, path, np.array([t_emit]))[0])
-    for _ in range(8):
+    t = t_emit
+    for _ in range(9):
         t = t_emit + float(path_delay(sc, path, np.array([t]))[0])
     return t
 
@@ -215,11 +215,11 @@ def synthesize(sc: Scenario, beacon, t_emit: np.ndarray, fs: float, frame_s: flo
         x[beacon.first_samples[k] : beacon.first_samples[k] + len(s)] += s
     xa = hilbert(x)
     t_mid = t_emit + frame_s / 2
-    direct_len = C * np.array([path_delay(sc, "D", np.array([t]))[0] for t in t_mid])
+    direct_len = C * path_delay(sc, "D", t_mid)
     paths = PATHS if echoes else ("D",)
     gains = {}
     for p in paths:
-        lens = C * np.array([path_delay(sc, p, np.array([t]))[0] for t in t_mid])
+        lens = C * path_delay(sc, p, t_mid)
         gains[p] = float(np.median([path_gain(sc, p, L, d) for L, d in zip(lens, direct_len)]))
     paths = [p for p in paths if p == "D" or abs(gains[p]) > 0.02]
     fading = {}
