@@ -36,6 +36,50 @@ def run(tree: Path, *args) -> tuple[float, float]:
     return time.perf_counter() - start, usage.ru_utime + usage.ru_stime
 
 
+def rx_speed(trees: dict[str, Path], work: Path, *, repeats: int = 3) -> str:
+    """The real-time factors table of ``rx`` in each exported tree (revision → tree), as markdown.
+
+    The recordings are made once in ``work`` with the first tree; each mode runs once per tree to warm
+    the numba caches, then ``repeats`` times interleaved between the trees.
+    """
+    import soundfile
+
+    first = next(iter(trees.values()))
+    scen = first / "examples" / "scenarios"
+    run(first, "tx", "--count", 20, "--period", 3, "-o", work / "b.wav", "-q")
+    run(first, "channel", work / "b.wav", "--scenario", scen / "doppler_profile.toml", "-o", work / "r.wav", "-q")
+    run(first, "channel", work / "b.wav", "--scenario", scen / "straight_line.toml", "--array", "tetra:0.08",
+        "-o", work / "r4.wav", "-q")
+    run(first, "tx", "--reference", "lfm:18000-30000:0.08", "--count", 20, "--period", 3, "--start", 0.2,
+        "-o", work / "p.wav", "-q")
+    run(first, "channel", work / "p.wav", "--scenario", scen / "doppler_profile.toml", "-o", work / "p_rx.wav", "-q")
+    duration = soundfile.info(str(work / "r.wav")).duration
+    modes = {"measurement only": [work / "r.wav", "--no-decode"], "with decoding": [work / "r.wav"],
+             "--array tetra (decoding)": [work / "r4.wav", "--array", "tetra:0.08"],
+             "--reference lfm": [work / "p_rx.wav", "--reference", work / "p_rx.json"]}
+    times = {(m, r): [] for m in modes for r in trees}
+    for a in modes.values():
+        for tree in trees.values():
+            run(tree, "rx", *a, "-o", work / "x.csv", "-q")
+    for _ in range(repeats):
+        for m, a in modes.items():
+            for r, tree in trees.items():
+                times[(m, r)].append(run(tree, "rx", *a, "-o", work / "x.csv", "-q"))
+    lines = [f"# seamodem rx real-time factors, {duration:.0f} s recordings, median of {repeats} "
+             f"interleaved runs (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)\n",
+             "| mode | " + " | ".join(f"{r} CPU / wall" for r in trees) + " | speed last vs first (CPU) |",
+             "|---|" + "---|" * (len(trees) + 1)]
+    for m in modes:
+        cells, cpus = [], []
+        for r in trees:
+            wall = statistics.median(t[0] for t in times[(m, r)])
+            cpu = statistics.median(t[1] for t in times[(m, r)])
+            cpus.append(cpu)
+            cells.append(f"{duration / cpu:.1f}x / {duration / wall:.1f}x")
+        lines.append(f"| {m} | " + " | ".join(cells) + f" | {cpus[0] / cpus[-1]:.2f} |")
+    return "\n".join(lines)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("revisions", nargs="+")
@@ -50,42 +94,7 @@ def main() -> int:
             archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev], capture_output=True, check=True).stdout
             subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
             trees[rev] = tree
-        first = trees[args.revisions[0]]
-        scen = first / "examples" / "scenarios"
-        run(first, "tx", "--count", 20, "--period", 3, "-o", tmp / "b.wav", "-q")
-        run(first, "channel", tmp / "b.wav", "--scenario", scen / "doppler_profile.toml", "-o", tmp / "r.wav", "-q")
-        run(first, "channel", tmp / "b.wav", "--scenario", scen / "straight_line.toml", "--array", "tetra:0.08",
-            "-o", tmp / "r4.wav", "-q")
-        run(first, "tx", "--reference", "lfm:18000-30000:0.08", "--count", 20, "--period", 3, "--start", 0.2,
-            "-o", tmp / "p.wav", "-q")
-        run(first, "channel", tmp / "p.wav", "--scenario", scen / "doppler_profile.toml", "-o", tmp / "p_rx.wav", "-q")
-        import soundfile
-
-        duration = soundfile.info(str(tmp / "r.wav")).duration
-        modes = {"measurement only": [tmp / "r.wav", "--no-decode"], "with decoding": [tmp / "r.wav"],
-                 "--array tetra (decoding)": [tmp / "r4.wav", "--array", "tetra:0.08"],
-                 "--reference lfm": [tmp / "p_rx.wav", "--reference", tmp / "p_rx.json"]}
-        times = {(m, r): [] for m in modes for r in trees}
-        for m, a in modes.items():
-            for r, tree in trees.items():
-                run(tree, "rx", *a, "-o", tmp / "x.csv", "-q")
-        for _ in range(args.repeats):
-            for m, a in modes.items():
-                for r, tree in trees.items():
-                    times[(m, r)].append(run(tree, "rx", *a, "-o", tmp / "x.csv", "-q"))
-        lines = [f"# seamodem rx real-time factors, {duration:.0f} s recordings, median of {args.repeats} "
-                 f"interleaved runs (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)\n",
-                 "| mode | " + " | ".join(f"{r} CPU / wall" for r in trees) + " | speed last vs first (CPU) |",
-                 "|---|" + "---|" * (len(trees) + 1)]
-        for m in modes:
-            cells, cpus = [], []
-            for r in trees:
-                wall = statistics.median(t[0] for t in times[(m, r)])
-                cpu = statistics.median(t[1] for t in times[(m, r)])
-                cpus.append(cpu)
-                cells.append(f"{duration / cpu:.1f}x / {duration / wall:.1f}x")
-            lines.append(f"| {m} | " + " | ".join(cells) + f" | {cpus[0] / cpus[-1]:.2f} |")
-        print("\n".join(lines))
+        print(rx_speed(trees, tmp, repeats=args.repeats))
     return 0
 
 

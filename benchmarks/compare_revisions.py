@@ -13,7 +13,8 @@ part. Outputs compared byte for byte (times and paths left out):
 - ``demo --duration 30``: every CSV and figure, summary.json without its wall times.
 
 Speed: real-time factors of ``rx`` (measurement only, with decoding, ``--array``, ``--reference``) on
-60 s recordings, interleaved between the revisions, best of 2.
+60 s recordings, by the child's CPU time, interleaved between the revisions
+(:func:`bench_rx_revisions.rx_speed`).
 
 Shape figures: the largest modules' line counts, the import cycles the scan of
 the newer revision's tests/test_architecture.py finds in each, ``duplicates``
@@ -42,6 +43,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_rx_revisions import rx_speed  # noqa: E402
 CLI = [sys.executable, "-c", "import sys; from seamodem.cli import main; sys.exit(main())"]
 
 
@@ -138,37 +141,12 @@ def timings(trees: dict[str, Path], work: Path) -> dict[str, dict[str, str]]:
                 subprocess.run([sys.executable, "-c", "import seamodem.cli.rx, scipy.signal, numba; "
                                 "from seamodem import receive_file"], env={**os.environ, "PYTHONPATH": str(tree / "src")})
                 runs[k]["imports"].append(time.perf_counter() - start)
-    # real-time factors (recording seconds over wall seconds), interleaved between the revisions, best of 2
-    beacon, rec = work / "rt_tx.wav", work / "rt_rx.wav"
-    first = next(iter(trees.values()))
-    seamodem(first, "tx", "--count", 20, "--period", 3, "-o", beacon, "-q")
-    seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/doppler_profile.toml", "-o", rec, "-q")
-    seamodem(first, "channel", beacon, "--scenario", first / "examples/scenarios/straight_line.toml",
-             "--array", "tetra:0.08", "-o", work / "rt_rx4.wav", "-q")
-    seamodem(first, "tx", "--reference", "lfm:18000-30000:0.08", "--count", 20, "--period", 3, "--start", 0.2,
-             "-o", work / "rt_ref.wav", "-q")
-    seamodem(first, "channel", work / "rt_ref.wav", "--scenario", first / "examples/scenarios/doppler_profile.toml",
-             "-o", work / "rt_ref_rx.wav", "-q")
-    duration = sf.info(str(rec)).duration
-    modes = {"rx measurement only": [rec, "--no-decode"], "rx with decoding": [rec],
-             "rx --array (decoding)": [work / "rt_rx4.wav", "--array", "tetra:0.08"],
-             "rx --reference": [work / "rt_ref_rx.wav", "--reference", work / "rt_ref_rx.json"]}
-    rt = {k: {m: [] for m in modes} for k in trees}
-    for k, tree in trees.items():  # warm the numba caches of each export
-        for m, a in modes.items():
-            seamodem(tree, "rx", *a, "-o", work / "rt.csv", "-q")
-    for _ in range(2):
-        for m, a in modes.items():
-            for k, tree in trees.items():
-                rt[k][m].append(seamodem(tree, "rx", *a, "-o", work / "rt.csv", "-q"))
     out = {}
     for k, r in runs.items():
         rx, imp = min(r["rx"]), min(r["imports"])
         out[k] = {"seamodem --help [s], median of 5": f"{statistics.median(r['help']):.3f}",
                   "rx one-line error [s], median of 5": f"{statistics.median(r['error']):.3f}",
-                  "rx 30 s noise [s], best of 2 (start-up share)": f"{rx:.2f} ({100 * imp / rx:.0f} %)",
-                  **{f"{m}, {duration:.0f} s recording: real time, best of 2": f"{duration / min(v):.1f}x"
-                     for m, v in rt[k].items()}}
+                  "rx 30 s noise [s], best of 2 (start-up share)": f"{rx:.2f} ({100 * imp / rx:.0f} %)"}
     return out
 
 
@@ -201,6 +179,8 @@ def main() -> int:
                 lines += [f"{key}:"] + [f"    {rev}: {v}" for rev, v in zip(trees, values)]
             else:
                 lines.append(f"{key:60} | {values[0]:>28} | {values[1]:>28}")
+        if not args.no_timing:
+            lines += ["", rx_speed(trees, tmp)]
         lines.append(f"\nload average during the run: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     text = "\n".join(lines)
     print(text)
