@@ -18,29 +18,28 @@ from ..io.files import check_writable
 __all__ = ["sound_speed", "sound_speed_words", "add_config_options", "config_from_args", "command_line", "emit_schedule",
            "output_path", "reported_warnings"]
 
-def sound_speed(args, sidecar: dict | None) -> float:
+
+def sound_speed(args, sidecar: dict | None) -> tuple[float, str]:
     """c for every receiver mode: --sound-speed, else the recording's sidecar, else 1500 m/s.
 
     Outside 1400–1600 m/s it is refused unless ``--force-sound-speed``
-    (:func:`~seamodem.receive.settings.resolve_sound_speed`). Where it came from is kept in
-    ``args.sound_speed_origin`` for the run's summary (:func:`sound_speed_words`).
+    (:func:`~seamodem.receive.settings.resolve_sound_speed`). Returns (c [m/s], where it came from:
+    "option", "sidecar" or "default"), the origin for the run's summary (:func:`sound_speed_words`).
     """
     from ..errors import ConfigError, SeamodemError
     from ..receive.settings import resolve_sound_speed
 
     try:
-        value, origin = resolve_sound_speed(args.sound_speed, sidecar, force=args.force_sound_speed)
+        return resolve_sound_speed(args.sound_speed, sidecar, force=args.force_sound_speed)
     except ConfigError as exc:
         raise SeamodemError(f"sound-speed: {exc.message}") from None
-    args.sound_speed_origin = origin
-    return value
 
 
-def sound_speed_words(args, value: float) -> str:
-    """``c = 1500 m/s`` for a run's summary, saying so when it is the default nobody gave."""
-    if getattr(args, "sound_speed_origin", "") == "default":
+def sound_speed_words(value: float, origin: str) -> str:
+    """``c = 1500 m/s ...`` for a run's summary, saying so when it is the default nobody gave."""
+    if origin == "default":
         return f"c = {value:g} m/s: the default, neither --sound-speed nor the recording's sidecar gave one"
-    return f"c = {value:g} m/s from the {getattr(args, 'sound_speed_origin', 'option')}"
+    return f"c = {value:g} m/s from the {origin}"
 
 
 def add_config_options(parser: argparse.ArgumentParser) -> None:

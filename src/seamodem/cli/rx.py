@@ -189,7 +189,8 @@ def _frame_emissions(args, recording: str, sidecar, duration_s: float):
 
 
 def _settings(args, sidecar: dict | None):
-    """The options (and the sidecar's channel section) as the receiver's settings: built here, once."""
+    """The options (and the sidecar's channel section) as the receiver's settings, built here once, and
+    where their sound speed came from."""
     from ..receive.settings import ReceiverSettings
 
     channel = (sidecar or {}).get("channel") or {}
@@ -200,8 +201,9 @@ def _settings(args, sidecar: dict | None):
         turnaround = float(two_way["turnaround_s"])
         if not args.quiet:
             print(f"two-way recording: turnaround {turnaround:g} s from its sidecar")
+    c, origin = sound_speed(args, sidecar)
     return ReceiverSettings(
-        sound_speed_mps=sound_speed(args, sidecar),
+        sound_speed_mps=c,
         clock_offset_s=args.clock_offset,
         turnaround_s=turnaround,
         v_max_mps=args.v_max,
@@ -209,7 +211,7 @@ def _settings(args, sidecar: dict | None):
         decode=args.decode,
         turbo_passes=args.turbo_passes,
         blank_impulses=args.blank_impulses,
-    )
+    ), origin
 
 
 class _Inputs(NamedTuple):
@@ -222,6 +224,7 @@ class _Inputs(NamedTuple):
     settings: object
     pilot: object
     payloads: list | None
+    sound_speed_origin: str
 
 
 def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
@@ -240,10 +243,10 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
     bits = sidecar_pilot_bits(sidecar) if sidecar is not None else None
     if bits is not None and bits.size == config.n_pilot:
         pilot = (1.0 - 2.0 * bits).astype(complex)
-    settings = _settings(args, sidecar)
+    settings, origin = _settings(args, sidecar)
     # an older or hand-made sidecar without payloads: decode without counting bit errors
     payloads = sidecar_payloads(sidecar) if sidecar is not None and settings.decode else None
-    return _Inputs(recording, source, config, emissions, settings, pilot, payloads)
+    return _Inputs(recording, source, config, emissions, settings, pilot, payloads, origin)
 
 
 def _described(inputs: _Inputs) -> dict:
@@ -316,7 +319,7 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
             raise exc.in_file(f"recording {inputs.path}") from None
         _warn_unmatched(counted.unmatched)
     if not args.quiet:
-        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured ({sound_speed_words(args, inputs.settings.sound_speed_mps)})"
+        print(f"wrote {out}: {n} frame{'s' if n != 1 else ''} measured ({sound_speed_words(inputs.settings.sound_speed_mps, inputs.sound_speed_origin)})"
               + (f"; {len(counted.unmatched)} arrival(s) before the first emission not written"
                  if counted.unmatched else ""))
         if args.decode and counted.decoded:

@@ -143,9 +143,10 @@ def run_reference(args: argparse.Namespace) -> int:
 
     recording = Path(args.recording[0])
     recording_side = _recording_sidecar(recording)
+    c, c_origin = sound_speed(args, recording_side)
     try:
         settings = ReferenceSettings(
-            sound_speed_mps=sound_speed(args, recording_side),
+            sound_speed_mps=c,
             clock_offset_s=args.clock_offset, turnaround_s=args.turnaround, v_max_mps=args.v_max,
             false_alarms_per_hour=args.false_alarms_per_hour,
             **({} if args.max_accel is None else {"max_accel_mps2": args.max_accel}),
@@ -240,5 +241,5 @@ def run_reference(args: argparse.Namespace) -> int:
     if not args.quiet:
         per = {r.name: sum(rec.reference == r.name for rec in records) for r in receiver.references}
         listed = ", ".join(f"{k}: {v}" for k, v in per.items())
-        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; {sound_speed_words(args, c)})")
+        print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; {sound_speed_words(c, c_origin)})")
     return 0
