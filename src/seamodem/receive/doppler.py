@@ -351,11 +351,45 @@ class ToneFit:
         Complex envelope amplitude.
     c_n0_hz : float
         Measured tone power over one-sided noise PSD [Hz].
+    spread_hz : float
+        RMS offset from ``offset_hz`` of the other spectral lines the tone
+        band holds, each weighted by its power relative to the fitted line's
+        (√ρ·Δf for one echo line ρ times as strong, Δf away) [Hz]: echoes
+        with their own Doppler, which pull the fitted line, or are the line
+        taken when stronger than the direct path's. 0 when none stands out of
+        the noise.
     """
 
     offset_hz: float
     amplitude: complex
     c_n0_hz: float
+    spread_hz: float = 0.0
+
+
+#: a residual spectral line counts when its periodogram bin stands above the noise floor by ln(bins / this):
+#: white noise alone crosses it in at most about 1 frame in 100
+_LINE_FALSE_ALARM = 0.01
+
+
+def _line_spread_hz(resid_w: np.ndarray, wx: np.ndarray, grid: np.ndarray, n_fft: int, f_hz: float, *,
+                    search_hz: float) -> float:
+    """√(Σ (P_res − floor)·(f − f̂)² / E_line) over the residual periodogram's bins that stand out of the
+    noise, E_line the energy the fitted line took out (the periodogram of the weighted samples less
+    the residual's); the floor is the residual periodogram's median / ln 2 (an exponential's mean)."""
+    inside = np.abs(grid) <= search_hz
+    p_res = np.abs(np.fft.fft(resid_w, n_fft))[inside] ** 2
+    p_all = np.abs(np.fft.fft(wx, n_fft))[inside] ** 2
+    floor = float(np.median(p_res)) / math.log(2)
+    e_line = float(np.sum(p_all) - np.sum(p_res))
+    if not (floor > 0 and e_line > 0):
+        return 0.0
+    excess = p_res - floor
+    # every bin tested (the zero-padded grid's are correlated: the count errs on the quiet side)
+    lines = p_res > floor * math.log(p_res.size / _LINE_FALSE_ALARM)
+    if not np.any(lines):
+        return 0.0
+    df = grid[inside][lines] - f_hz
+    return float(math.sqrt(np.sum(excess[lines] * df**2) / e_line))
 
 
 def tone_frequency_ml(
@@ -406,7 +440,8 @@ def tone_frequency_ml(
     resid = x[inside] - amplitude * basis[inside]
     variance = float(np.mean(np.abs(resid) ** 2))
     c_n0 = abs(amplitude) ** 2 * noise_bandwidth_hz / max(variance, np.finfo(float).tiny)
-    return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0))
+    spread = _line_spread_hz(weights * (x - amplitude * basis), wx, grid, n_fft, f, search_hz=search_hz)
+    return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0), spread_hz=spread)
 
 
 def tone_track_eq9(

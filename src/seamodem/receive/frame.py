@@ -48,6 +48,8 @@ __all__ = [
     "one_blas_thread",
     "receiver_front_end",
     "tone_fallback_sigma_mps",
+    "earlier_path_gap_s",
+    "two_carrier_sigma_mps",
     "unmodelled_sigmas",
 ]
 
@@ -155,6 +157,24 @@ def direct_path_share(m: FrameMeasurement) -> float:
     return float(max(power[first] / power.sum(), 1e-3))
 
 
+def earlier_path_gap_s(m: FrameMeasurement) -> float:
+    """How far before the path taken as the direct one the earliest path the pilot fit found lies [s]
+    (0 when it is the earliest).
+
+    The direct path is the earliest path at least 0.3 of the strongest
+    (:func:`~seamodem.receive.multipath.fit_paths`): an earlier, weaker one is
+    an echo's precursor only in noise, and otherwise the direct path faded
+    (Rician fading, a notch) below the echoes. The frame cannot say which, so
+    the arrival's σ covers the gap (a faded direct path at −2 dB taken 1.3–
+    4.5 ms late: 2–7 m off with σ 6–16 cm before).
+    """
+    paths = m.echoes if m.echoes is not None else m.paths
+    delays = np.asarray(paths.delays_s, dtype=float)
+    if delays.size == 0:
+        return 0.0
+    return max(0.0, float(paths.first_s - np.min(delays)))
+
+
 def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *, echoes: bool) -> float:
     """σ of the tone ML as the direct path's v_r [m/s], without a whole-frame fit.
 
@@ -225,7 +245,9 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
         (:data:`PLAUSIBLE_ACCEL_MPS2`) over the frame [m/s].
     sigma_tau : float
         The arrival's: the direct path's channel shape across its band as a
-        delay (an unresolved echo, ``WholeFrameFit.tilt_delay_s``) [s].
+        delay (an unresolved echo, ``WholeFrameFit.tilt_delay_s``), and
+        ``sigma_v``'s share through the time scale it gives the symbol
+        instants (``sigma_v / c`` over half the frame) [s].
     """
     c, f0, dur = sound_speed_mps, config.carrier_hz, config.frame_duration_s
     amp = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
@@ -233,7 +255,56 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
     drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
     # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
     tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
-    return math.hypot(fade, drift), _K_MERGE * tilt
+    sigma_v = math.hypot(fade, drift)
+    # the symbol instants' time scale is the carrier's (1 + v/c): a phase-rate error of the fading phasor
+    # scales them too, and the frame-start arrival, fitted to the timing over the whole frame (centroid
+    # D/2 in), moves by that error's v/c times D/2 (a Rician direct path at 12–17 dB: 2–6 mm off, σ 0.5 mm)
+    scale = sigma_v / c * dur / 2
+    return sigma_v, math.hypot(_K_MERGE * tilt, scale)
+
+
+def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_tone: float, sigma_v: float,
+                          config: FrameConfig) -> float:
+    """σ term [m/s] of the direct path's whole-frame Doppler from its gap to the tone's, as two carriers see it.
+
+    A Doppler shift is the same speed at every carrier; a phase that wanders
+    with time (a fading or beating phasor, frequency-flat across the band)
+    is the same phase rate at every carrier, i.e. a speed error inversely
+    proportional to the carrier. With the data band at f0 and the tone at
+    f_t, the data's error is f_t / (f_t − f0) times the gap v − v_tone (−2.5
+    for jmse2024): the dual-frequency argument of GNSS's ionosphere-free
+    combination. The tone also sums the echoes, which pull it towards their
+    Doppler: the resolved paths' power-weighted Doppler centroid is taken
+    out of the gap and their spread counts as the tone's. The gap's square
+    less its noise expectation (both estimates' variances), times the ratio,
+    is this term's square (0 without a tone).
+
+    Parameters
+    ----------
+    wf : WholeFrameFit
+        The fit (every resolved path's amplitude and Doppler).
+    first : int
+        The direct path's index in it.
+    v_tone, sigma_tone : float
+        The tone's speed and σ (with its line spread) [m/s].
+    sigma_v : float
+        The direct path's σ so far [m/s].
+    config : FrameConfig
+        Carrier and tone frequencies.
+    """
+    if not (math.isfinite(v_tone) and math.isfinite(sigma_tone)):
+        return 0.0
+    power = np.abs(np.asarray(wf.amplitudes)) ** 2
+    w = power / max(float(power.sum()), np.finfo(float).tiny)
+    dv = np.asarray(wf.v_mps, dtype=float) - float(wf.v_mps[first])
+    centroid = float(np.sum(w * dv))
+    spread2 = float(np.sum(w * (dv - centroid) ** 2))
+    gap = float(wf.v_mps[first]) + centroid - v_tone
+    # less its noise expectation (as the log-amplitude rate): beyond 3 σ only, a gap just inside it would
+    # leave the data's error at up to 2.5 × 3 of the tone's σ unseen (8σ on an analytic fading path)
+    excess = gap**2 - (sigma_tone**2 + sigma_v**2 + spread2)
+    ratio = config.tone_hz / (config.tone_hz - config.carrier_hz)
+    return abs(ratio) * math.sqrt(max(excess, 0.0))
 
 
 class BasebandBuffers:
@@ -421,6 +492,7 @@ class FrameMeasurer:
         # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
         # sees the same channel
         sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_unmodelled", 0.0))
+        sigma_first = earlier_path_gap_s(m)
         # the direct path's data-aided arrival over the frame; on decisions, only when its σ is the smaller
         # (a fit on decisions mostly wrong: 23 mm off, σ 29 mm, where the pilot's arrival was 1 mm off)
         if timing is not None:
@@ -431,6 +503,7 @@ class FrameMeasurer:
             if doppler["v_r_source"] == "whole_frame" or timing[1] < sigma_tau:
                 t_arr, sigma_tau = timing
             sigma_tau = math.sqrt(sigma_tau**2 + max(0.0, excess))
+        sigma_tau = math.hypot(sigma_tau, sigma_first)
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
         else:
@@ -485,6 +558,9 @@ class FrameMeasurer:
         v_tone = m.v_tone_ml_mps
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
+        # the tone sums every path: echoes with their own Doppler are lines of their own in its band, which
+        # pull the fitted one or are the one taken (the stronger); their spread is the tone's honest scale
+        sigma_tone = math.hypot(sigma_tone, m.tone.spread_hz * c / self.config.tone_hz)
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
@@ -529,6 +605,12 @@ class FrameMeasurer:
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
+            # (a fit on decisions has the tone as its referee already, above)
+            sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone, sigma, self.config) \
+                if source == "whole_frame" else 0.0
+            sigma = math.hypot(sigma, sigma_2c)
+            # a phase-rate error is a time-scale error of the symbol instants too (as in unmodelled_sigmas)
+            sigma_tau_un = math.hypot(sigma_tau_un, sigma_2c / c * self.config.frame_duration_s / 2)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,

@@ -77,7 +77,7 @@ class WholeFrameFit:
     amp_rate_hz : numpy.ndarray
         RMS over the frame of the rate of each path's log-amplitude [1/s],
         from a line and a parabola fitted to the segments' ln|Σz| (as their
-        phases), counted beyond 3 of what the noise gives it (0 when within).
+        phases), each term less its noise expectation (0 when below it).
         A path that fades, or that an unresolved echo beats with, changes
         amplitude: for a Rician or two-phasor sum the log-amplitude rate and
         the phase-rate error (a Doppler error) have the same scale.
@@ -94,6 +94,12 @@ class WholeFrameFit:
         what the timing CRLB gives it [s] (a diagnostic: the segments' timing
         estimator is not efficient, so noise alone leaves 2–4 mm of it at
         12 dB; the fit's ``sigma_delay_s`` already carries the scatter).
+    diagnostics : tuple of dict, optional
+        Per path, the raw statistics behind ``amp_rate_hz`` (for calibration
+        studies, e.g. ``benchmarks/bench_corpus.py``): the segments' sums
+        ``zs`` and times ``ts``, the log-amplitude's line-and-parabola
+        coefficients ``amp_coef`` and their covariance ``amp_cov``, the phase
+        fit's ``sigma_b`` and the drift ``beta``.
     """
 
     delays_s: np.ndarray
@@ -107,6 +113,7 @@ class WholeFrameFit:
     n_reference: int
     amp_rate_hz: np.ndarray | None = None
     tilt_delay_s: np.ndarray | None = None
+    diagnostics: tuple | None = None
     delay_scatter_s: np.ndarray | None = None
 
 
@@ -507,6 +514,7 @@ def fit_whole_frame(
     amp_rate = np.zeros(n_paths)
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
+    diag: list = [None] * n_paths
     for p in range(n_paths):
         zs, ts, design, w, g_inv = last_phase[p]
         # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²)
@@ -517,10 +525,14 @@ def fit_whole_frame(
         a = cov @ (design.T @ (wa * la))
         # mean square of a1 + 2 a2 t over t uniform in ±D/2: a1² + a2² D²/3, less its noise expectation
         d2 = config.frame_duration_s**2 / 3
-        # counted beyond 3 of its noise σ only (as a gap between two estimates): noise alone leaves a positive
-        # remainder on a third of the frames otherwise
-        ms = a[1] ** 2 + a[2] ** 2 * d2 - 9 * (cov[1, 1] + cov[2, 2] * d2)
+        # each term less its noise expectation (not beyond 3 of its σ, as a gap between two estimates: that
+        # leaves 0 on most fading frames, and the fading direct path's Doppler 6–25σ off with it, the phase
+        # rate being a second, independent draw of the same scale): an unbiased estimate of the rate's
+        # mean square, whose noise-only remainder adds at most the fit's own σ
+        ms = max(a[1] ** 2 - cov[1, 1], 0.0) + max(a[2] ** 2 - cov[2, 2], 0.0) * d2
         amp_rate[p] = math.sqrt(max(ms, 0.0))
+        diag[p] = dict(zs=zs.copy(), ts=ts.copy(), amp_coef=a.copy(), amp_cov=cov.copy(), phase_cov_shape=g_inv.copy(), sigma_b=float(sigma_b[p]),
+                       beta=float(beta[p]))
         d_seg, wt = last_timing[p]
         dm = float(np.sum(wt * d_seg) / np.sum(wt))
         spread2 = float(np.sum(wt * (d_seg - dm) ** 2) / np.sum(wt))
@@ -568,4 +580,5 @@ def fit_whole_frame(
         amp_rate_hz=amp_rate[order],
         delay_scatter_s=scatter[order],
         tilt_delay_s=tilt[order],
+        diagnostics=tuple(diag[i] for i in order),
     )
