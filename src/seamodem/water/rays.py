@@ -1,0 +1,381 @@
+"""Rays in a range-independent, piecewise-linear sound-speed profile: eigenrays, travel times, angles.
+
+Within a layer where c(z) = c_a + g (z − z_a), a ray is a circular arc and
+its horizontal run and travel time between two depths have closed forms
+(Snell: the ray parameter p = cos θ / c is constant, θ the grazing angle)::
+
+    Δr = p (c_a + c_b) Δz / (s_a + s_b),          s = √(1 − p² c²)
+    Δt = [ln(c_b / c_a) + ln((1 + s_a) / (1 + s_b))] / g
+
+(the second written with ``log1p`` so that g → 0 gives Δz / (c s) without
+cancellation). A ray with parameter p oscillates between an upper vertex
+(where c = 1/p, a turning point, or the surface, a reflection) and a lower
+one (a turning point or the bottom). A *family* is a starting direction and
+a number of vertices; its horizontal range X(p) and travel time T(p) are
+sums of layer integrals. Eigenrays to a receiver at horizontal range R are
+the roots of X(p) = R, bracketed on a grid of launch angles and refined by
+bisection, all families and all ranges at once.
+
+Depths are positive down [m]; angles are grazing angles [rad], positive when
+the ray heads down.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError
+from .profile import SoundSpeedProfile
+
+__all__ = ["Eigenray", "RayTracer", "Family"]
+
+
+@dataclass(frozen=True)
+class Family:
+    """A path topology: which way the ray leaves the source, and how many vertices it passes.
+
+    Parameters
+    ----------
+    down : bool
+        True when the ray leaves the source heading down.
+    n_vertices : int
+        Vertices (turning points or reflections) between source and receiver.
+    """
+
+    down: bool
+    n_vertices: int
+
+    def last_vertex_is_upper(self) -> bool:
+        """True when the last vertex is the upper one (the ray then arrives heading down)."""
+        return (not self.down) == (self.n_vertices % 2 == 1)
+
+    def n_upper(self) -> int:
+        """How many of the vertices are upper ones."""
+        return (self.n_vertices + (0 if self.down else 1)) // 2
+
+
+@dataclass(frozen=True)
+class Eigenray:
+    """One ray from a source to a receiver.
+
+    Attributes
+    ----------
+    name : str
+        ``direct`` (no reflection, turning points allowed), ``surface``, ``bottom``,
+        ``surface-bottom``, ``bottom-surface``, ... (the reflections in order) .
+    n_surface, n_bottom, n_turning : int
+        Surface reflections, bottom reflections and turning points on the way.
+    travel_time_s : float
+        Travel time [s].
+    ray_parameter_spm : float
+        p = cos θ / c [s/m], = ∂t/∂R.
+    launch_angle_rad, arrival_angle_rad : float
+        Grazing angles at the source and at the receiver [rad], positive heading down.
+    dt_drange_spm, dt_dsource_depth_spm, dt_dreceiver_depth_spm : float
+        Derivatives of the travel time with horizontal range and with each end's depth [s/m].
+    """
+
+    name: str
+    n_surface: int
+    n_bottom: int
+    n_turning: int
+    travel_time_s: float
+    ray_parameter_spm: float
+    launch_angle_rad: float
+    arrival_angle_rad: float
+    dt_drange_spm: float
+    dt_dsource_depth_spm: float
+    dt_dreceiver_depth_spm: float
+
+
+def _log1p_ratio(x: np.ndarray) -> np.ndarray:
+    """log1p(x) / x, = 1 at x = 0 (exact to rounding for |x| ≤ 1e-8 by its series)."""
+    small = np.abs(x) <= 1e-8
+    safe = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - 0.5 * x, np.log1p(safe) / safe)
+
+
+def _names(n_surface: int, n_bottom: int, first_upper: bool, n_reflections: int) -> str:
+    if n_reflections == 0:
+        return "direct"
+    seq = ["surface", "bottom"] if first_upper else ["bottom", "surface"]
+    if n_surface == 0 or n_bottom == 0:
+        return "surface" * (n_surface > 0) + "bottom" * (n_bottom > 0) + (f"{n_reflections}" if n_reflections > 1 else "")
+    return "-".join(seq[i % 2] for i in range(n_reflections))
+
+
+class RayTracer:
+    """Trace rays through a profile between a flat surface (z = 0) and, optionally, a flat bottom.
+
+    Parameters
+    ----------
+    profile : SoundSpeedProfile
+        c(z), linear between its nodes, held beyond them.
+    water_depth_m : float, optional
+        Depth of the bottom [m]; None: no bottom (rays that do not turn are lost).
+    n_angles : int
+        Launch angles on the grid that brackets the eigenrays (more finds eigenrays closer together).
+
+    Raises
+    ------
+    ConfigError
+        A water depth that is not positive.
+
+    Examples
+    --------
+    >>> tracer = RayTracer(SoundSpeedProfile.isovelocity(1500.0), water_depth_m=100.0)
+    >>> ray = tracer.eigenrays(10.0, 20.0, 300.0)[0]
+    >>> ray.name, round(ray.travel_time_s * 1500.0, 6)
+    ('direct', 300.166620)
+    """
+
+    def __init__(self, profile: SoundSpeedProfile, *, water_depth_m: float | None = None, n_angles: int = 400):
+        if water_depth_m is not None and not water_depth_m > 0:
+            raise ConfigError("water_depth_m", f"must be positive, got {water_depth_m!r}")
+        self.profile = profile
+        self.water_depth_m = None if water_depth_m is None else float(water_depth_m)
+        bottom = self.water_depth_m if self.water_depth_m is not None else max(profile.depth_m[-1], 1.0) * 2 + 1e4
+        z = np.union1d([0.0, bottom], profile.depth_m[profile.depth_m < bottom])
+        self.node_z = z
+        self.node_c = profile.c(z)
+        self._top, self._bottom = z[:-1], z[1:]
+        self._c_top = self.node_c[:-1]
+        self._g = np.diff(self.node_c) / np.diff(z)
+        n_fine = n_angles // 4
+        self.angle_grid = np.concatenate([np.geomspace(1e-7, 0.02, n_fine, endpoint=False),
+                                          np.linspace(0.02, np.pi / 2, n_angles - n_fine)])
+
+    # ---- layer integrals ------------------------------------------------------------------------------
+    def integrals(self, p, z1, z2, *, turn1=False, turn2=False) -> tuple[np.ndarray, np.ndarray]:
+        """Horizontal run and travel time of rays with parameter p between two depths (one way).
+
+        Parameters
+        ----------
+        p : array_like
+            Ray parameters [s/m], with p·c(z) ≤ 1 on the span.
+        z1, z2 : array_like
+            The span's ends [m], z1 ≤ z2, broadcast with ``p``.
+        turn1, turn2 : bool or array_like of bool
+            Whether each end is the ray's turning point (there the vertical slowness is zero,
+            set exactly: √(1 − p²c²) computed from a rounded p·c ≈ 1 would be ≈ 1e-8, an error
+            of a millimetre in the run of a grazing ray).
+
+        Returns
+        -------
+        run_m, time_s : numpy.ndarray
+            Horizontal distance [m] and travel time [s], the broadcast shape.
+        """
+        p, z1, z2, t1, t2 = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (p, z1, z2, turn1, turn2)))
+        p, a_, b_ = p[..., None], z1[..., None], z2[..., None]
+        a = np.clip(self._top, a_, b_)
+        b = np.clip(self._bottom, a_, b_)
+        dz = b - a
+        g = self._g
+        ca = self._c_top + g * (a - self._top)
+        cb = self._c_top + g * (b - self._top)
+        sa = np.sqrt(np.maximum(0.0, 1.0 - (p * ca) ** 2))
+        sb = np.sqrt(np.maximum(0.0, 1.0 - (p * cb) ** 2))
+        sa = np.where((t1[..., None] > 0) & (a == a_), 0.0, sa)
+        sb = np.where((t2[..., None] > 0) & (b == b_), 0.0, sb)
+        den = sa + sb
+        live = dz > 0
+        den = np.where(live, den, 1.0)
+        run = np.where(live, p * (ca + cb) * dz / den, 0.0)
+        k = p * p * (ca + cb) / (den * (1.0 + sb))
+        time = dz * (_log1p_ratio(g * dz / ca) / ca + k * _log1p_ratio(g * dz * k))
+        time = np.where(live, time, 0.0)
+        return run.sum(axis=-1), time.sum(axis=-1)
+
+    def _turning(self, p: np.ndarray, z0: float, upward: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Depth of the first vertex above (or below) z0 for each p, and whether it is a reflection."""
+        inside = (self.node_z < z0) if upward else (self.node_z > z0)
+        nodes = self.node_z[inside][::-1] if upward else self.node_z[inside]
+        depths = np.concatenate([[z0], nodes])
+        speeds = np.interp(depths, self.node_z, self.node_c)
+        over = speeds[None, :] >= (1.0 / np.where(p > 0, p, 1e-300))[:, None]  # (m, K)
+        over[:, 0] = False
+        hit = over.any(axis=1)
+        k = np.argmax(over, axis=1)
+        k = np.where(hit, k, 1)
+        za, zb = depths[k - 1], depths[k]
+        ca, cb = speeds[k - 1], speeds[k]
+        frac = np.where(cb != ca, (1.0 / np.where(p > 0, p, 1e-300) - ca) / np.where(cb != ca, cb - ca, 1.0), 0.0)
+        z_turn = za + np.clip(frac, 0.0, 1.0) * (zb - za)
+        wall = 0.0 if upward else (self.water_depth_m if self.water_depth_m is not None else np.inf)
+        return np.where(hit, z_turn, wall), ~hit
+
+    # ---- families -------------------------------------------------------------------------------------
+    def families(self, max_vertices: int) -> list[Family]:
+        """Direct (0 vertices), then each starting direction with 1 … ``max_vertices`` vertices."""
+        return [Family(False, 0)] + [Family(d, k) for k in range(1, max_vertices + 1) for d in (False, True)]
+
+    def family_curves(self, family: Family, source_depth_m: float, receiver_depth_m: float, p) -> dict:
+        """Horizontal range X(p) and travel time T(p) of one family, with what its vertices are.
+
+        Returns
+        -------
+        dict
+            ``range_m``, ``time_s`` (NaN where the family does not reach the receiver),
+            ``upper_reflects``, ``lower_reflects`` (bool arrays) and ``valid``.
+        """
+        zs, zr = float(source_depth_m), float(receiver_depth_m)
+        p = np.asarray(p, dtype=float)
+        z_up, up_wall = self._turning(p, zs, True)
+        z_dn, dn_wall = self._turning(p, zs, False)
+        valid = (z_up <= zr + 1e-12) & (zr <= z_dn + 1e-12)
+        if family.n_vertices == 0:
+            x, t = self.integrals(p, min(zs, zr), max(zs, zr))
+            valid &= zr != zs
+        else:
+            upper_first = not family.down
+            up_turns, dn_turns = ~up_wall, ~dn_wall
+            head = (self.integrals(p, z_up, zs, turn1=up_turns) if upper_first
+                    else self.integrals(p, zs, z_dn, turn2=dn_turns))
+            tail = (self.integrals(p, z_up, zr, turn1=up_turns) if family.last_vertex_is_upper()
+                    else self.integrals(p, zr, z_dn, turn2=dn_turns))
+            x, t = head[0] + tail[0], head[1] + tail[1]
+            if family.n_vertices > 1:
+                fx, ft = self.integrals(p, z_up, np.where(np.isfinite(z_dn), z_dn, zs), turn1=up_turns, turn2=dn_turns)
+                x, t = x + (family.n_vertices - 1) * fx, t + (family.n_vertices - 1) * ft
+            uses_lower = family.down or family.n_vertices > 1
+            if uses_lower:
+                valid &= np.isfinite(z_dn)
+        x = np.where(valid, x, np.nan)
+        t = np.where(valid, t, np.nan)
+        return {"range_m": x, "time_s": t, "upper_reflects": up_wall, "lower_reflects": dn_wall, "valid": valid}
+
+    def _ray_parameters(self, source_depth_m: float, receiver_depth_m: float, angles) -> np.ndarray:
+        c_hi = max(float(self.profile.c(source_depth_m)), float(self.profile.c(receiver_depth_m)))
+        return np.cos(angles) / c_hi
+
+    def check_depths(self, *depths_m: float) -> None:
+        """Raise ConfigError when a depth is above the surface or below the bottom."""
+        for z in depths_m:
+            if not np.all(np.asarray(z) >= 0) or (self.water_depth_m is not None and np.any(np.asarray(z) > self.water_depth_m)):
+                raise ConfigError("depth", f"must lie within the water, 0–{self.water_depth_m or np.inf:g} m, got {z!r}")
+
+    def solve(self, family: Family, source_depth_m: float, receiver_depth_m: float, ranges_m,
+              *, iterations: int = 60) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Launch angles of one family's eigenrays at many horizontal ranges at once.
+
+        Parameters
+        ----------
+        family : Family
+        source_depth_m, receiver_depth_m : float
+            Depths [m].
+        ranges_m : array_like
+            Horizontal ranges [m], shape ``(n,)``.
+        iterations : int
+            Bisection steps (60 bring a grid cell to rounding).
+
+        Returns
+        -------
+        list of (numpy.ndarray, numpy.ndarray)
+            One entry per monotonic branch of X(p): the indices of the ranges it reaches and
+            the grid-angle parameter (angle at the faster end [rad]) of each eigenray.
+        """
+        grid = self.angle_grid
+        targets = np.asarray(ranges_m, dtype=float).reshape(-1)
+        x = self.family_curves(family, source_depth_m, receiver_depth_m,
+                               self._ray_parameters(source_depth_m, receiver_depth_m, grid))["range_m"]
+        out = []
+        finite = np.isfinite(x)
+        # branches: runs of valid samples, cut where X(p) turns (caustics)
+        edges = np.flatnonzero(np.diff(finite.astype(np.int8)) != 0) + 1
+        for run in np.split(np.arange(grid.size), edges):
+            if run.size < 2 or not finite[run[0]]:
+                continue
+            dx = np.diff(x[run])
+            turns = np.flatnonzero(np.sign(dx[1:]) * np.sign(dx[:-1]) < 0) + 1
+            for piece in np.split(run, turns):
+                if piece.size < 2:
+                    continue
+                xp = x[piece]
+                lo, hi = min(xp[0], xp[-1]), max(xp[0], xp[-1])
+                idx = np.flatnonzero((targets >= lo) & (targets <= hi))
+                if idx.size == 0:
+                    continue
+                increasing = xp[-1] > xp[0]
+                order = xp if increasing else xp[::-1]
+                j = np.clip(np.searchsorted(order, targets[idx]), 1, piece.size - 1)
+                if not increasing:
+                    j = piece.size - j
+                    a, b = grid[piece[j]], grid[piece[j - 1]]
+                else:
+                    a, b = grid[piece[j - 1]], grid[piece[j]]
+                out.append((idx, self._bisect(family, source_depth_m, receiver_depth_m, targets[idx], a, b, iterations)))
+        return out
+
+    def _bisect(self, family, zs, zr, targets, a, b, iterations):
+        fa = self._range_at(family, zs, zr, a) - targets
+        for _ in range(iterations):
+            m = 0.5 * (a + b)
+            fm = self._range_at(family, zs, zr, m) - targets
+            same = np.sign(fm) == np.sign(fa)
+            a, fa = np.where(same, m, a), np.where(same, fm, fa)
+            b = np.where(same, b, m)
+        return 0.5 * (a + b)
+
+    def _range_at(self, family, zs, zr, angles):
+        x = self.family_curves(family, zs, zr, self._ray_parameters(zs, zr, angles))["range_m"]
+        return np.where(np.isfinite(x), x, np.inf)
+
+    # ---- eigenrays ------------------------------------------------------------------------------------
+    def eigenrays(self, source_depth_m: float, receiver_depth_m: float, range_m: float, *,
+                  max_vertices: int = 2) -> list[Eigenray]:
+        """Every ray from the source to the receiver with at most ``max_vertices`` vertices, first arrival first.
+
+        Parameters
+        ----------
+        source_depth_m, receiver_depth_m : float
+            Depths [m], within the water.
+        range_m : float
+            Horizontal range [m], > 0.
+        max_vertices : int
+            Turning points plus reflections allowed (2: direct, surface, bottom,
+            surface-bottom, bottom-surface, and refracted rays that turn).
+
+        Returns
+        -------
+        list of Eigenray
+            Sorted by travel time.
+        """
+        if not range_m > 0:
+            raise ConfigError("range_m", f"must be positive, got {range_m!r}")
+        self.check_depths(source_depth_m, receiver_depth_m)
+        rays = [ray for fam in self.families(max_vertices)
+                for _, angles in self.solve(fam, source_depth_m, receiver_depth_m, [range_m])
+                for ray in self.describe(fam, source_depth_m, receiver_depth_m, angles)]
+        return sorted(rays, key=lambda r: r.travel_time_s)
+
+    def describe(self, family: Family, source_depth_m: float, receiver_depth_m: float, angles) -> list[Eigenray]:
+        """The :class:`Eigenray` of a family at grid angles that :meth:`solve` found."""
+        zs, zr = float(source_depth_m), float(receiver_depth_m)
+        p = self._ray_parameters(zs, zr, np.asarray(angles, dtype=float))
+        cur = self.family_curves(family, zs, zr, p)
+        cs, cr = float(self.profile.c(zs)), float(self.profile.c(zr))
+        ss = np.sqrt(np.maximum(0.0, 1.0 - (p * cs) ** 2))
+        sr = np.sqrt(np.maximum(0.0, 1.0 - (p * cr) ** 2))
+        if family.n_vertices == 0:
+            launch_down = arrive_down = zr > zs
+        else:
+            launch_down, arrive_down = family.down, family.last_vertex_is_upper()
+        sign_l, sign_a = (1.0 if launch_down else -1.0), (1.0 if arrive_down else -1.0)
+        n_up, n_low = family.n_upper(), family.n_vertices - family.n_upper()
+        rays = []
+        for i in range(p.size):
+            if not cur["valid"][i]:
+                continue
+            ns = n_up if cur["upper_reflects"][i] else 0
+            nb = n_low if cur["lower_reflects"][i] else 0
+            rays.append(Eigenray(
+                name=_names(ns, nb, not family.down, ns + nb), n_surface=ns, n_bottom=nb,
+                n_turning=family.n_vertices - ns - nb, travel_time_s=float(cur["time_s"][i]),
+                ray_parameter_spm=float(p[i]),
+                launch_angle_rad=sign_l * float(np.arccos(min(1.0, p[i] * cs))),
+                arrival_angle_rad=sign_a * float(np.arccos(min(1.0, p[i] * cr))),
+                dt_drange_spm=float(p[i]), dt_dsource_depth_spm=-sign_l * float(ss[i]) / cs,
+                dt_dreceiver_depth_spm=sign_a * float(sr[i]) / cr))
+        return rays
