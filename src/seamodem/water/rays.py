@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import ConfigError
 from .profile import SoundSpeedProfile
 
-__all__ = ["Eigenray", "RayTracer", "Family"]
+__all__ = ["Eigenray", "RayTracer", "Family", "path_name"]
 
 
 @dataclass(frozen=True)
@@ -97,13 +97,19 @@ def _log1p_ratio(x: np.ndarray) -> np.ndarray:
     return np.where(small, 1.0 - 0.5 * x, np.log1p(safe) / safe)
 
 
-def _names(n_surface: int, n_bottom: int, first_upper: bool, n_reflections: int) -> str:
-    if n_reflections == 0:
+def path_name(n_surface: int, n_bottom: int, upper_first: bool) -> str:
+    """A path's name from its reflections: ``direct``, ``surface``, ``bottom``, ``surface2``, ``surface-bottom``, ...
+
+    ``upper_first``: the ray leaves the source heading up (so a surface reflection comes first
+    when both kinds alternate).
+    """
+    n = n_surface + n_bottom
+    if n == 0:
         return "direct"
-    seq = ["surface", "bottom"] if first_upper else ["bottom", "surface"]
     if n_surface == 0 or n_bottom == 0:
-        return "surface" * (n_surface > 0) + "bottom" * (n_bottom > 0) + (f"{n_reflections}" if n_reflections > 1 else "")
-    return "-".join(seq[i % 2] for i in range(n_reflections))
+        return ("surface" if n_surface else "bottom") + (f"{n}" if n > 1 else "")
+    seq = ["surface", "bottom"] if upper_first else ["bottom", "surface"]
+    return "-".join(seq[i % 2] for i in range(n))
 
 
 class RayTracer:
@@ -257,7 +263,7 @@ class RayTracer:
                 raise ConfigError("depth", f"must lie within the water, 0–{self.water_depth_m or np.inf:g} m, got {z!r}")
 
     def solve(self, family: Family, source_depth_m: float, receiver_depth_m: float, ranges_m,
-              *, iterations: int = 60) -> list[tuple[np.ndarray, np.ndarray]]:
+              *, iterations: int = 40) -> list[tuple[np.ndarray, np.ndarray]]:
         """Launch angles of one family's eigenrays at many horizontal ranges at once.
 
         Parameters
@@ -268,7 +274,7 @@ class RayTracer:
         ranges_m : array_like
             Horizontal ranges [m], shape ``(n,)``.
         iterations : int
-            Bisection steps (60 bring a grid cell to rounding).
+            False-position steps at most (a grid cell reaches rounding in about 10).
 
         Returns
         -------
@@ -309,14 +315,21 @@ class RayTracer:
         return out
 
     def _bisect(self, family, zs, zr, targets, a, b, iterations):
+        """Illinois false position, vectorised: keeps the bracket, converges superlinearly on a smooth X."""
         fa = self._range_at(family, zs, zr, a) - targets
+        fb = self._range_at(family, zs, zr, b) - targets
         for _ in range(iterations):
-            m = 0.5 * (a + b)
+            den = fb - fa
+            ok = (den != 0) & np.isfinite(den)
+            m = np.where(ok, b - fb * (b - a) / np.where(ok, den, 1.0), 0.5 * (a + b))
+            m = np.where((m - a) * (m - b) < 0, m, 0.5 * (a + b))
             fm = self._range_at(family, zs, zr, m) - targets
-            same = np.sign(fm) == np.sign(fa)
-            a, fa = np.where(same, m, a), np.where(same, fm, fa)
-            b = np.where(same, b, m)
-        return 0.5 * (a + b)
+            flip = np.sign(fm) != np.sign(fb)
+            a, fa = np.where(flip, b, a), np.where(flip, fb, 0.5 * fa)
+            b, fb = m, fm
+            if np.all((np.abs(fb) < 1e-10) | (np.abs(b - a) <= 4e-16 * np.abs(b))):  # 0.1 nm, or rounding
+                break
+        return np.where(np.abs(fa) < np.abs(fb), a, b)
 
     def _range_at(self, family, zs, zr, angles):
         x = self.family_curves(family, zs, zr, self._ray_parameters(zs, zr, angles))["range_m"]
@@ -350,32 +363,45 @@ class RayTracer:
                 for ray in self.describe(fam, source_depth_m, receiver_depth_m, angles)]
         return sorted(rays, key=lambda r: r.travel_time_s)
 
-    def describe(self, family: Family, source_depth_m: float, receiver_depth_m: float, angles) -> list[Eigenray]:
-        """The :class:`Eigenray` of a family at grid angles that :meth:`solve` found."""
+    def ray_arrays(self, family: Family, source_depth_m: float, receiver_depth_m: float, angles) -> dict:
+        """Travel time, angles, reflections and derivatives of a family's rays at grid angles, as arrays.
+
+        Returns
+        -------
+        dict
+            ``valid``, ``time_s``, ``p`` (= ∂t/∂R), ``launch_rad``, ``arrival_rad``,
+            ``n_surface``, ``n_bottom``, ``dt_dzs``, ``dt_dzr`` [s/m], one entry per angle.
+        """
         zs, zr = float(source_depth_m), float(receiver_depth_m)
         p = self._ray_parameters(zs, zr, np.asarray(angles, dtype=float))
         cur = self.family_curves(family, zs, zr, p)
         cs, cr = float(self.profile.c(zs)), float(self.profile.c(zr))
-        ss = np.sqrt(np.maximum(0.0, 1.0 - (p * cs) ** 2))
-        sr = np.sqrt(np.maximum(0.0, 1.0 - (p * cr) ** 2))
         if family.n_vertices == 0:
             launch_down = arrive_down = zr > zs
         else:
             launch_down, arrive_down = family.down, family.last_vertex_is_upper()
         sign_l, sign_a = (1.0 if launch_down else -1.0), (1.0 if arrive_down else -1.0)
-        n_up, n_low = family.n_upper(), family.n_vertices - family.n_upper()
+        n_up = family.n_upper()
+        return {
+            "valid": cur["valid"], "time_s": cur["time_s"], "p": p,
+            "launch_rad": sign_l * np.arccos(np.minimum(1.0, p * cs)),
+            "arrival_rad": sign_a * np.arccos(np.minimum(1.0, p * cr)),
+            "n_surface": np.where(cur["upper_reflects"], n_up, 0),
+            "n_bottom": np.where(cur["lower_reflects"], family.n_vertices - n_up, 0),
+            "dt_dzs": -sign_l * np.sqrt(np.maximum(0.0, 1.0 - (p * cs) ** 2)) / cs,
+            "dt_dzr": sign_a * np.sqrt(np.maximum(0.0, 1.0 - (p * cr) ** 2)) / cr,
+        }
+
+    def describe(self, family: Family, source_depth_m: float, receiver_depth_m: float, angles) -> list[Eigenray]:
+        """The :class:`Eigenray` of a family at grid angles that :meth:`solve` found."""
+        a = self.ray_arrays(family, source_depth_m, receiver_depth_m, angles)
         rays = []
-        for i in range(p.size):
-            if not cur["valid"][i]:
-                continue
-            ns = n_up if cur["upper_reflects"][i] else 0
-            nb = n_low if cur["lower_reflects"][i] else 0
+        for i in np.flatnonzero(a["valid"]):
+            ns, nb = int(a["n_surface"][i]), int(a["n_bottom"][i])
             rays.append(Eigenray(
-                name=_names(ns, nb, not family.down, ns + nb), n_surface=ns, n_bottom=nb,
-                n_turning=family.n_vertices - ns - nb, travel_time_s=float(cur["time_s"][i]),
-                ray_parameter_spm=float(p[i]),
-                launch_angle_rad=sign_l * float(np.arccos(min(1.0, p[i] * cs))),
-                arrival_angle_rad=sign_a * float(np.arccos(min(1.0, p[i] * cr))),
-                dt_drange_spm=float(p[i]), dt_dsource_depth_spm=-sign_l * float(ss[i]) / cs,
-                dt_dreceiver_depth_spm=sign_a * float(sr[i]) / cr))
+                name=path_name(ns, nb, not family.down), n_surface=ns, n_bottom=nb,
+                n_turning=family.n_vertices - ns - nb, travel_time_s=float(a["time_s"][i]),
+                ray_parameter_spm=float(a["p"][i]), launch_angle_rad=float(a["launch_rad"][i]),
+                arrival_angle_rad=float(a["arrival_rad"][i]), dt_drange_spm=float(a["p"][i]),
+                dt_dsource_depth_spm=float(a["dt_dzs"][i]), dt_dreceiver_depth_spm=float(a["dt_dzr"][i])))
         return rays
