@@ -134,7 +134,7 @@ class RayTracer:
     >>> tracer = RayTracer(SoundSpeedProfile.isovelocity(1500.0), water_depth_m=100.0)
     >>> ray = tracer.eigenrays(10.0, 20.0, 300.0)[0]
     >>> ray.name, round(ray.travel_time_s * 1500.0, 6)
-    ('direct', 300.166620)
+    ('direct', 300.16662)
     """
 
     def __init__(self, profile: SoundSpeedProfile, *, water_depth_m: float | None = None, n_angles: int = 400):

@@ -64,7 +64,7 @@ class TravelTimeTable:
     >>> tracer = RayTracer(SoundSpeedProfile.isovelocity(1500.0), water_depth_m=50.0)
     >>> table = TravelTimeTable(tracer, 10.0, [5.0], np.arange(10.0, 1001.0, 10.0))
     >>> round(float(table.travel_time(5.0, 300.0)) * 1500.0, 6), round(float(table.horizontal_range(5.0, 0.2)), 6)
-    (300.041664, 299.958330)
+    (300.041664, 299.95833)
     """
 
     def __init__(self, tracer: RayTracer, source_depth_m: float, receiver_depths_m, ranges_m, *,
