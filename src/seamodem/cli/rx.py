@@ -64,7 +64,8 @@ def add_parser(sub) -> None:
     g = p.add_argument_group("sound-speed profile")
     add_profile_option(g, what="range_m becomes the straight-line distance of the direct ray traced through it, "
                                "horizontal_range_m its horizontal range, c for Doppler the profile's at the vehicle "
-                               "(needs --beacon-depth and --vehicle-depth)")
+                               "(needs --beacon-depth and --vehicle-depth; with the depths alone, a simulated "
+                               "recording's [water] profile from its sidecar)")
     g.add_argument("--beacon-depth", type=float, metavar="M", help="beacon depth [m], with --sound-speed-profile")
     g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m], with --sound-speed-profile")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
@@ -196,6 +197,24 @@ def _frame_emissions(args, recording: str, sidecar, duration_s: float):
     return Emissions(times_s=times)
 
 
+def _water_profile(args, profile, sidecar: dict | None):
+    """The profile of --sound-speed-profile, else (with both depths given) the simulated recording's sidecar's."""
+    depths = (args.beacon_depth, args.vehicle_depth)
+    if profile is None and depths == (None, None):
+        return None
+    if None in depths:
+        raise SeamodemError("sound-speed-profile: needs --beacon-depth and --vehicle-depth (the ray joins the two)")
+    if profile is None:
+        traced = (((sidecar or {}).get("channel") or {}).get("model") or {}).get("sound_speed_profile")
+        if traced is None:
+            raise SeamodemError("beacon-depth: depths turn travel time into range along a ray: give "
+                                "--sound-speed-profile (the recording's sidecar has no [water] profile)")
+        from ..water import SoundSpeedProfile
+
+        profile = SoundSpeedProfile.from_dict(traced, where="sidecar channel.model.sound_speed_profile")
+    return profile
+
+
 def _settings(args, sidecar: dict | None, profile=None):
     """The options (and the sidecar's channel section) as the receiver's settings, built here once, and
     where their sound speed came from (with a profile and no --sound-speed: the profile's c at the vehicle)."""
@@ -245,12 +264,11 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
 
     # a .mat recording: its variable and, when it holds none, its rate (the same options as --reference)
     profile = sound_speed_profile(args)
-    if profile is not None and (args.beacon_depth is None or args.vehicle_depth is None):
-        raise SeamodemError("sound-speed-profile: needs --beacon-depth and --vehicle-depth (the ray joins the two)")
     source = open_recording(recording, mat_variable=getattr(args, "mat_variable", None),
                             sample_rate_hz=getattr(args, "sample_rate", None))
     source.one_channel(0 if args.array else args.channel)
     sidecar, own = _sidecar_for(args.config, recording)
+    profile = _water_profile(args, profile, sidecar)
     config = config_from_args(args, config_file=str(sidecar_path(recording)) if own else None)
     emissions = _frame_emissions(args, recording, sidecar, source.duration_s)
     pilot = None
@@ -294,7 +312,7 @@ def run(args: argparse.Namespace) -> int:
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
     if batch and args.array:
         raise SeamodemError("array: a hydrophone array is received from a single recording (give one file)")
-    if batch and args.sound_speed_profile:
+    if batch and (args.sound_speed_profile or args.beacon_depth is not None or args.vehicle_depth is not None):
         raise SeamodemError("sound-speed-profile: applied to a single recording only (give one file)")
     if batch and args.plot:
         raise SeamodemError("plot: figures are drawn for a single recording only (drop --plot, or give one file)")
