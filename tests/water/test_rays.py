@@ -79,3 +79,14 @@ def test_bad_depths_and_ranges():
         tracer.eigenrays(10.0, 5.0, 0.0)
     with pytest.raises(ConfigError, match="water_depth_m"):
         RayTracer(SoundSpeedProfile.isovelocity(1500.0), water_depth_m=-1.0)
+
+
+def test_equal_depths_give_the_horizontal_direct_ray():
+    # the demo's case (beacon and vehicle at the same depth): a ray that neither climbs nor dives
+    tracer = RayTracer(SoundSpeedProfile.isovelocity(1500.0), water_depth_m=20.0)
+    for r in (1.0, 100.0, 5000.0):
+        rays = {ray.name: ray for ray in tracer.eigenrays(5.0, 5.0, r)}
+        # found with the receiver 10 µm lower: Δz² / (2 R c) below 1e-13 s
+        assert rays["direct"].travel_time_s == pytest.approx(r / 1500.0, abs=1e-13)
+        assert abs(rays["direct"].launch_angle_rad) <= 1.001e-5 / r  # the 10 µm step seen from R
+        assert rays["surface"].travel_time_s == pytest.approx(np.hypot(r, 10.0) / 1500.0, abs=1e-13)

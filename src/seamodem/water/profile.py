@@ -116,11 +116,6 @@ class SoundSpeedProfile:
         z = np.union1d(np.clip(self.depth_m, a, b), [a, b])
         return float(np.trapezoid(self.c(z), z) / (b - a))
 
-    @property
-    def is_isovelocity(self) -> bool:
-        """True when every node has the same speed."""
-        return bool(np.all(self.c_mps == self.c_mps[0]))
-
     def to_dict(self) -> dict:
         """Plain lists, for a sidecar or a scenario (:meth:`from_dict` reads them back)."""
         return {"depth_m": self.depth_m.tolist(), "c_mps": self.c_mps.tolist(), "source": self.source}

@@ -150,11 +150,11 @@ class RayTracer:
         self._c_top = self.node_c[:-1]
         self._g = np.diff(self.node_c) / np.diff(z)
         n_fine = n_angles // 4
-        self.angle_grid = np.concatenate([np.geomspace(1e-7, 0.02, n_fine, endpoint=False),
+        self.angle_grid = np.concatenate([np.geomspace(1e-9, 0.02, n_fine, endpoint=False),
                                           np.linspace(0.02, np.pi / 2, n_angles - n_fine)])
 
     # ---- layer integrals ------------------------------------------------------------------------------
-    def integrals(self, p, z1, z2, *, turn1=False, turn2=False) -> tuple[np.ndarray, np.ndarray]:
+    def integrals(self, p, z1, z2, *, turn1=False, turn2=False, angle=None, c_ref=None) -> tuple[np.ndarray, np.ndarray]:
         """Horizontal run and travel time of rays with parameter p between two depths (one way).
 
         Parameters
@@ -167,22 +167,32 @@ class RayTracer:
             Whether each end is the ray's turning point (there the vertical slowness is zero,
             set exactly: √(1 − p²c²) computed from a rounded p·c ≈ 1 would be ≈ 1e-8, an error
             of a millimetre in the run of a grazing ray).
+        angle, c_ref : array_like and float, optional
+            The rays as p = cos(angle) / c_ref: then s = √(1 − p²c²) is computed as
+            √(sin² angle + cos² angle (c_ref − c)(c_ref + c) / c_ref²), exact for grazing rays
+            where 1 − p²c² would cancel.
 
         Returns
         -------
         run_m, time_s : numpy.ndarray
             Horizontal distance [m] and travel time [s], the broadcast shape.
         """
-        p, z1, z2, t1, t2 = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (p, z1, z2, turn1, turn2)))
-        p, a_, b_ = p[..., None], z1[..., None], z2[..., None]
+        phi = 0.0 if angle is None else angle  # used only with c_ref
+        p, z1, z2, t1, t2, phi = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (p, z1, z2, turn1, turn2, phi)))
+        p, a_, b_, phi = p[..., None], z1[..., None], z2[..., None], phi[..., None]
         a = np.clip(self._top, a_, b_)
         b = np.clip(self._bottom, a_, b_)
         dz = b - a
         g = self._g
         ca = self._c_top + g * (a - self._top)
         cb = self._c_top + g * (b - self._top)
-        sa = np.sqrt(np.maximum(0.0, 1.0 - (p * ca) ** 2))
-        sb = np.sqrt(np.maximum(0.0, 1.0 - (p * cb) ** 2))
+        if c_ref is None:
+            sa = np.sqrt(np.maximum(0.0, 1.0 - (p * ca) ** 2))
+            sb = np.sqrt(np.maximum(0.0, 1.0 - (p * cb) ** 2))
+        else:
+            sin2, cos2 = np.sin(phi) ** 2, np.cos(phi) ** 2 / (c_ref * c_ref)
+            sa = np.sqrt(np.maximum(0.0, sin2 + cos2 * (c_ref - ca) * (c_ref + ca)))
+            sb = np.sqrt(np.maximum(0.0, sin2 + cos2 * (c_ref - cb) * (c_ref + cb)))
         sa = np.where((t1[..., None] > 0) & (a == a_), 0.0, sa)
         sb = np.where((t2[..., None] > 0) & (b == b_), 0.0, sb)
         den = sa + sb
@@ -194,20 +204,26 @@ class RayTracer:
         time = np.where(live, time, 0.0)
         return run.sum(axis=-1), time.sum(axis=-1)
 
-    def _turning(self, p: np.ndarray, z0: float, upward: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Depth of the first vertex above (or below) z0 for each p, and whether it is a reflection."""
+    def _turning(self, angles: np.ndarray, c_ref: float, z0: float, upward: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Depth of the first vertex above (or below) z0 for each ray, and whether it is a reflection.
+
+        A ray p = cos(angle) / c_ref turns where c = 1/p, i.e. where c − c_ref reaches
+        c_ref (1 − cos angle) / cos angle = 2 c_ref sin²(angle/2) / cos angle (written so that a
+        grazing ray, whose cos rounds to 1, still tells an isovelocity layer from a turning point).
+        """
         inside = (self.node_z < z0) if upward else (self.node_z > z0)
         nodes = self.node_z[inside][::-1] if upward else self.node_z[inside]
         depths = np.concatenate([[z0], nodes])
-        speeds = np.interp(depths, self.node_z, self.node_c)
-        over = speeds[None, :] >= (1.0 / np.where(p > 0, p, 1e-300))[:, None]  # (m, K)
+        rise = np.interp(depths, self.node_z, self.node_c) - c_ref  # c − c_ref along the way
+        excess = (2.0 * c_ref * np.sin(0.5 * angles) ** 2 / np.cos(angles))[:, None]
+        over = rise[None, :] >= excess  # (m, K)
         over[:, 0] = False
         hit = over.any(axis=1)
-        k = np.argmax(over, axis=1)
-        k = np.where(hit, k, 1)
+        k = np.where(hit, np.argmax(over, axis=1), 1)
         za, zb = depths[k - 1], depths[k]
-        ca, cb = speeds[k - 1], speeds[k]
-        frac = np.where(cb != ca, (1.0 / np.where(p > 0, p, 1e-300) - ca) / np.where(cb != ca, cb - ca, 1.0), 0.0)
+        ra, rb = rise[k - 1], rise[k]
+        step = np.where(rb != ra, rb - ra, 1.0)
+        frac = np.where(rb != ra, (excess[:, 0] - ra) / step, 0.0)
         z_turn = za + np.clip(frac, 0.0, 1.0) * (zb - za)
         wall = 0.0 if upward else (self.water_depth_m if self.water_depth_m is not None else np.inf)
         return np.where(hit, z_turn, wall), ~hit
@@ -217,44 +233,63 @@ class RayTracer:
         """Direct (0 vertices), then each starting direction with 1 … ``max_vertices`` vertices."""
         return [Family(False, 0)] + [Family(d, k) for k in range(1, max_vertices + 1) for d in (False, True)]
 
-    def family_curves(self, family: Family, source_depth_m: float, receiver_depth_m: float, p) -> dict:
-        """Horizontal range X(p) and travel time T(p) of one family, with what its vertices are.
+    def family_curves(self, family: Family, source_depth_m: float, receiver_depth_m: float, angles) -> dict:
+        """Horizontal range X and travel time T of one family's rays, with what their vertices are.
+
+        Parameters
+        ----------
+        family : Family
+        source_depth_m, receiver_depth_m : float
+            Depths [m].
+        angles : array_like
+            The rays, by their grazing angle at the faster of the two ends [rad], in (0, π/2]:
+            p = cos(angle) / max(c_source, c_receiver).
 
         Returns
         -------
         dict
-            ``range_m``, ``time_s`` (NaN where the family does not reach the receiver),
+            ``p`` [s/m], ``range_m``, ``time_s`` (NaN where the family does not reach the receiver),
             ``upper_reflects``, ``lower_reflects`` (bool arrays) and ``valid``.
         """
-        zs, zr = float(source_depth_m), float(receiver_depth_m)
-        p = np.asarray(p, dtype=float)
-        z_up, up_wall = self._turning(p, zs, True)
-        z_dn, dn_wall = self._turning(p, zs, False)
+        zs, zr = self._ends(family, source_depth_m, receiver_depth_m)
+        angles = np.asarray(angles, dtype=float)
+        c_ref = max(float(self.profile.c(zs)), float(self.profile.c(zr)))
+        p = np.cos(angles) / c_ref
+
+        def run(z1, z2, **turns):
+            return self.integrals(p, z1, z2, angle=angles, c_ref=c_ref, **turns)
+
+        z_up, up_wall = self._turning(angles, c_ref, zs, True)
+        z_dn, dn_wall = self._turning(angles, c_ref, zs, False)
         valid = (z_up <= zr + 1e-12) & (zr <= z_dn + 1e-12)
         if family.n_vertices == 0:
-            x, t = self.integrals(p, min(zs, zr), max(zs, zr))
-            valid &= zr != zs
+            x, t = run(min(zs, zr), max(zs, zr))
         else:
             upper_first = not family.down
             up_turns, dn_turns = ~up_wall, ~dn_wall
-            head = (self.integrals(p, z_up, zs, turn1=up_turns) if upper_first
-                    else self.integrals(p, zs, z_dn, turn2=dn_turns))
-            tail = (self.integrals(p, z_up, zr, turn1=up_turns) if family.last_vertex_is_upper()
-                    else self.integrals(p, zr, z_dn, turn2=dn_turns))
+            head = run(z_up, zs, turn1=up_turns) if upper_first else run(zs, z_dn, turn2=dn_turns)
+            tail = run(z_up, zr, turn1=up_turns) if family.last_vertex_is_upper() else run(zr, z_dn, turn2=dn_turns)
             x, t = head[0] + tail[0], head[1] + tail[1]
             if family.n_vertices > 1:
-                fx, ft = self.integrals(p, z_up, np.where(np.isfinite(z_dn), z_dn, zs), turn1=up_turns, turn2=dn_turns)
+                fx, ft = run(z_up, np.where(np.isfinite(z_dn), z_dn, zs), turn1=up_turns, turn2=dn_turns)
                 x, t = x + (family.n_vertices - 1) * fx, t + (family.n_vertices - 1) * ft
-            uses_lower = family.down or family.n_vertices > 1
-            if uses_lower:
+            if family.down or family.n_vertices > 1:
                 valid &= np.isfinite(z_dn)
         x = np.where(valid, x, np.nan)
         t = np.where(valid, t, np.nan)
-        return {"range_m": x, "time_s": t, "upper_reflects": up_wall, "lower_reflects": dn_wall, "valid": valid}
+        return {"p": p, "range_m": x, "time_s": t, "upper_reflects": up_wall, "lower_reflects": dn_wall,
+                "valid": valid}
 
-    def _ray_parameters(self, source_depth_m: float, receiver_depth_m: float, angles) -> np.ndarray:
-        c_hi = max(float(self.profile.c(source_depth_m)), float(self.profile.c(receiver_depth_m)))
-        return np.cos(angles) / c_hi
+    #: for the vertex-free family, a receiver at the source's depth is moved this far [m]: the horizontal
+    #: direct ray is then found as any other, at a travel-time cost of Δz² / (2 R c) < 1e-13 s beyond 1 m
+    EQUAL_DEPTH_STEP_M = 1e-5
+
+    def _ends(self, family: Family, source_depth_m: float, receiver_depth_m: float) -> tuple[float, float]:
+        zs, zr = float(source_depth_m), float(receiver_depth_m)
+        if family.n_vertices == 0 and abs(zr - zs) < self.EQUAL_DEPTH_STEP_M:
+            deeper = self.water_depth_m is None or zs + self.EQUAL_DEPTH_STEP_M <= self.water_depth_m
+            zr = zs + (self.EQUAL_DEPTH_STEP_M if deeper else -self.EQUAL_DEPTH_STEP_M)
+        return zs, zr
 
     def check_depths(self, *depths_m: float) -> None:
         """Raise ConfigError when a depth is above the surface or below the bottom."""
@@ -284,8 +319,7 @@ class RayTracer:
         """
         grid = self.angle_grid
         targets = np.asarray(ranges_m, dtype=float).reshape(-1)
-        x = self.family_curves(family, source_depth_m, receiver_depth_m,
-                               self._ray_parameters(source_depth_m, receiver_depth_m, grid))["range_m"]
+        x = self.family_curves(family, source_depth_m, receiver_depth_m, grid)["range_m"]
         out = []
         finite = np.isfinite(x)
         # branches: runs of valid samples, cut where X(p) turns (caustics)
@@ -332,7 +366,7 @@ class RayTracer:
         return np.where(np.abs(fa) < np.abs(fb), a, b)
 
     def _range_at(self, family, zs, zr, angles):
-        x = self.family_curves(family, zs, zr, self._ray_parameters(zs, zr, angles))["range_m"]
+        x = self.family_curves(family, zs, zr, angles)["range_m"]
         return np.where(np.isfinite(x), x, np.inf)
 
     # ---- eigenrays ------------------------------------------------------------------------------------
@@ -372,10 +406,15 @@ class RayTracer:
             ``valid``, ``time_s``, ``p`` (= ∂t/∂R), ``launch_rad``, ``arrival_rad``,
             ``n_surface``, ``n_bottom``, ``dt_dzs``, ``dt_dzr`` [s/m], one entry per angle.
         """
-        zs, zr = float(source_depth_m), float(receiver_depth_m)
-        p = self._ray_parameters(zs, zr, np.asarray(angles, dtype=float))
-        cur = self.family_curves(family, zs, zr, p)
+        zs, zr = self._ends(family, source_depth_m, receiver_depth_m)
+        angles = np.asarray(angles, dtype=float)
+        cur = self.family_curves(family, zs, zr, angles)
+        p = cur["p"]
         cs, cr = float(self.profile.c(zs)), float(self.profile.c(zr))
+        c_ref = max(cs, cr)
+        # sines and cosines of the end angles from the grid angle (exact for grazing rays, as in integrals)
+        ss, sr = (np.sqrt(np.maximum(0.0, np.sin(angles) ** 2 + (np.cos(angles) / c_ref) ** 2 * (c_ref - c) * (c_ref + c)))
+                  for c in (cs, cr))
         if family.n_vertices == 0:
             launch_down = arrive_down = zr > zs
         else:
@@ -384,12 +423,12 @@ class RayTracer:
         n_up = family.n_upper()
         return {
             "valid": cur["valid"], "time_s": cur["time_s"], "p": p,
-            "launch_rad": sign_l * np.arccos(np.minimum(1.0, p * cs)),
-            "arrival_rad": sign_a * np.arccos(np.minimum(1.0, p * cr)),
+            "launch_rad": sign_l * np.arctan2(ss, p * cs),
+            "arrival_rad": sign_a * np.arctan2(sr, p * cr),
             "n_surface": np.where(cur["upper_reflects"], n_up, 0),
             "n_bottom": np.where(cur["lower_reflects"], family.n_vertices - n_up, 0),
-            "dt_dzs": -sign_l * np.sqrt(np.maximum(0.0, 1.0 - (p * cs) ** 2)) / cs,
-            "dt_dzr": sign_a * np.sqrt(np.maximum(0.0, 1.0 - (p * cr) ** 2)) / cr,
+            "dt_dzs": -sign_l * ss / cs,
+            "dt_dzr": sign_a * sr / cr,
         }
 
     def describe(self, family: Family, source_depth_m: float, receiver_depth_m: float, angles) -> list[Eigenray]:

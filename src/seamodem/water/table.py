@@ -151,8 +151,3 @@ class TravelTimeTable:
         v1, d1 = row(i + 1)
         out = _hermite(z[i], z[i + 1], v0, v1, d0, d1, zq)
         return np.where((zq >= z[0]) & (zq <= z[-1]), out, np.nan)
-
-    @property
-    def label(self) -> str:
-        """What the table holds, for messages."""
-        return f"{self.path} path from {self.source_depth_m:g} m to {self.depths_m[0]:g}–{self.depths_m[-1]:g} m"
