@@ -71,3 +71,18 @@ def test_a_bad_profile_file_is_a_one_line_error_naming_it(mission, capsys):
                  "--start", "0,0", "--depth", "5", "25", "--sound-speed-profile", str(bad), "-o", str(mission / "y.csv")])
     err = capsys.readouterr().err
     assert code == 2 and str(bad) in err and "increase strictly" in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_vehicle_depth_can_come_from_its_depth_sensor_log(mission):
+    _write(mission / "depth.csv", ["t_s", "depth_m"], [(t, VEHICLE_DEPTH) for t in np.arange(0.0, 151.0, 0.5)])
+    out = mission / "track_log.csv"
+    code = main(["nav", "track", str(mission / "meas.csv"), "--imu", str(mission / "imu.csv"), "--beacon",
+                 f"{BEACON[0]},{BEACON[1]}", "--start", "0,0", "--start-speed", "1", "--truth", str(mission / "truth.csv"),
+                 "--depth-log", str(mission / "depth.csv"), "--beacon-depth", str(BEACON_DEPTH), "--filter",
+                 "inertial-range", "--sound-speed-profile", str(mission / "svp.csv"), "-o", str(out)])
+    assert code == 0
+    sidecar = json.loads(out.with_suffix(".json").read_text())
+    # the same ranges as with --depth 5 25: the same track
+    assert sidecar["mean_error_m"] == pytest.approx(_error(mission, "--sound-speed-profile", str(mission / "svp.csv")),
+                                                    abs=1e-6)
+    assert sidecar["inputs"]["sound_speed_profile"].endswith("svp.csv")
