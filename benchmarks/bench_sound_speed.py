@@ -58,8 +58,8 @@ def ray_accuracy(ranges) -> None:
             dt, dl, da = abs(e.travel_time_s - t), abs(np.degrees(e.launch_angle_rad - launch)), \
                 abs(np.degrees(e.arrival_angle_rad - arrival))
             worst_t, worst_a = max(worst_t, dt), max(worst_a, dl, da)
-            print(f"{c0:6g} {g:8g} {zs:5g} {zr:5g} {r:6g}  {e.n_turning:5d} {dt * 1e9:10.4f} {dl:17.2e} {da:18.2e}")
-    print(f"worst: travel time {worst_t * 1e9:.4f} ns (goal 1000 ns), angle {worst_a:.2e} deg (goal 0.01 deg)\n")
+            print(f"{c0:6g} {g:8g} {zs:5g} {zr:5g} {r:6g}  {e.n_turning:5d} {dt * 1e9:10.1e} {dl:17.2e} {da:18.2e}")
+    print(f"worst: travel time {worst_t * 1e9:.1e} ns (goal 1000 ns), angle {worst_a:.2e} deg (goal 0.01 deg)\n")
 
 
 def ray_speed() -> None:
