@@ -199,6 +199,7 @@ def private_imports() -> list[tuple[str, str, str]]:
 LAYERS = [
     {"errors", "_version", "_lazy", "_progress", "config", "dsp", "io"},
     {"plots"},
+    {"water"},
     {"transmit"},
     {"channel", "decode"},
     {"receive"},

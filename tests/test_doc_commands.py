@@ -59,6 +59,10 @@ RUN = [
     "seamodem rx survey/*.wav -o all.csv --resume",
     "seamodem ber --snr 0 1 2 3 4 5 6 8 --frames 50 -o ber_awgn/",
     "seamodem ber --scenario examples/scenarios/decode_multipath.toml --period 3 --snr 2 4 6 8 -o ber_mp/",
+    "seamodem tx --preset jmse2024 --count 3 --period 1 -o thermo_beacon.wav",
+    "seamodem channel thermo_beacon.wav --scenario examples/scenarios/thermocline.toml -o thermo.wav",
+    "seamodem rx thermo.wav --sound-speed-profile examples/water/thermocline_svp.csv --beacon-depth 25 "
+    "--vehicle-depth 5 -o thermo.csv",
 ]
 
 #: Rewrites for the suite's time budget (the documented command → what runs instead, and why it is the same path).
@@ -120,6 +124,9 @@ ELSEWHERE = {
     "seamodem nav track MEAS.csv --imu IMU.csv --geodetic --beacon 48.38243,-4.407295 --start 48.3822,-4.4079 "
     "-o track.csv": "needs the user's MEAS.csv and IMU.csv logged near Brest",
     "seamodem rx RECORDING.wav [--config SIDECAR.json] -o MEAS.csv": "a synopsis (placeholders)",
+    "seamodem nav track meas.csv --imu imu.csv --beacon 45,-25 --start 0,0 --depth 5 25 --sound-speed-profile "
+    "examples/water/thermocline_svp.csv -o track.csv":
+        "needs an IMU log; tests/navigation/test_track_profile.py runs nav track --sound-speed-profile --depth",
     "seamodem rx RECORDING.wav --emit-start 0 --emit-period 3 -o MEAS.csv":
         "a synopsis; docs/guide.md's 'seamodem rx sea.wav --emit-start 0 --emit-period 3' runs here",
 }
@@ -160,7 +167,7 @@ def test_documented_commands_run(tmp_path, monkeypatch, capsys):
                     shutil.copy(Path(name).with_suffix(".json"), (Path("survey") / name).with_suffix(".json"))
         code = main(argv(command))
         assert code == 0, f"{command}: exit {code}: {capsys.readouterr().err[-1500:]}"
-    for name in ("beacon.png", "my.toml", "notes.wav", "q.wav", "ber_awgn", "ber_mp"):
+    for name in ("beacon.png", "my.toml", "notes.wav", "q.wav", "ber_awgn", "ber_mp", "thermo.csv"):
         assert (tmp_path / name).exists(), name
     # the last rx of meas.csv is the PPS case: 4 frames emitted at 0, 3, 6, 9 s, all heard and decoded
     meas, both = pd.read_csv("meas.csv"), pd.read_csv("all.csv")

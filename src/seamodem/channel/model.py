@@ -9,6 +9,9 @@ A real gain multiplies s; a complex one acts on the analytic signal (see
   b_p and the vehicle at r(t); amplitude = spreading · Thorp absorption ·
   reflection coefficients · rough-surface loss, normalised so that the direct
   path has amplitude 1 at t = 0 (the loss removed is reported).
+- :class:`RayTracedModel`: the same geometry in a [water] sound-speed profile:
+  τ_p(t) = the travel time of the traced eigenray of path p (direct, surface,
+  bottom, ...) from the beacon's depth to the vehicle's at their horizontal range.
 - :class:`ProfileModel`: τ_0(t) = R₀/c − ∫₀ᵗ v_r/c (paper 003 eq 12) for the
   direct path, and echoes at fixed excess delays sharing its Doppler (eq 13).
 """
@@ -28,7 +31,7 @@ from .propagation import absorption_gain, rough_surface_gain, spreading_gain, th
 from .resample import HALF_TAPS
 from .scenario import Scenario
 
-__all__ = ["PathInfo", "ChannelModel", "GeometryModel", "ProfileModel", "build_model"]
+__all__ = ["PathInfo", "ChannelModel", "GeometryModel", "RayTracedModel", "ProfileModel", "build_model"]
 
 AMPLITUDE_STEP = 64
 
@@ -347,6 +350,82 @@ class GeometryModel(ChannelModel):
         }
 
 
+class RayTracedModel(GeometryModel):
+    """A geometry scenario whose paths are rays traced through its [water] profile (module docstring).
+
+    Each path of :class:`GeometryModel` (direct, ``S``, ``B``, ``SB``, ...) becomes the eigenray with
+    the same reflections, its delay read from a :class:`~seamodem.water.TravelTimeTable` over the
+    depths and horizontal ranges the vehicle covers (built when :meth:`check_span` learns the span,
+    rebuilt if a query leaves it). Amplitudes are :class:`GeometryModel`'s with the path length
+    c·τ. Where a path has no eigenray (a shadow) its amplitude is 0.
+
+    Attributes
+    ----------
+    profile : SoundSpeedProfile
+        The water's c(z).
+    tracer : RayTracer
+    """
+
+    #: table grid [m]: horizontal range step, depth step, and the margin around the span
+    RANGE_STEP_M, DEPTH_STEP_M, MARGIN_M = 1.0, 0.5, 2.0
+
+    def __init__(self, scenario: Scenario, *, reference_frequency_hz: float):
+        from ..water import RayTracer
+
+        self.profile = scenario.water.sound_speed_profile(scenario.base_dir)
+        self.tracer = RayTracer(self.profile, water_depth_m=scenario.environment.water_depth_m)
+        self._tables, self._cover = None, None
+        super().__init__(scenario, reference_frequency_hz=reference_frequency_hz)
+
+    def _ensure(self, depth_m: np.ndarray, range_m: np.ndarray) -> None:
+        from ..water import TravelTimeTable
+        from ..water.rays import path_name
+
+        lo_z, hi_z, lo_r, hi_r = depth_m.min(), depth_m.max(), range_m.min(), range_m.max()
+        if self._cover is not None:
+            c = self._cover
+            if c[0] <= lo_z and hi_z <= c[1] and c[2] <= lo_r and hi_r <= c[3]:
+                return
+            lo_z, hi_z, lo_r, hi_r = min(lo_z, c[0]), max(hi_z, c[1]), min(lo_r, c[2]), max(hi_r, c[3])
+        bottom = self.scenario.environment.water_depth_m
+        z0, z1 = max(0.0, lo_z - self.MARGIN_M), min(bottom, hi_z + self.MARGIN_M)
+        depths = np.append(np.arange(z0, z1, self.DEPTH_STEP_M), z1) if z1 - z0 > 1e-9 else np.array([z0])
+        ranges = np.arange(max(self.RANGE_STEP_M, lo_r - self.MARGIN_M), hi_r + self.MARGIN_M + self.RANGE_STEP_M,
+                           self.RANGE_STEP_M)
+        beacon_depth = -self.scenario.beacon.position_m[2]
+        order = max(p.n_surface + p.n_bottom for p in self.paths)
+        self._tables = [TravelTimeTable(self.tracer, beacon_depth, depths, ranges, max_vertices=max(order, 1),
+                                        path=path_name(p.n_surface, p.n_bottom, p.name.startswith("S")))
+                        for p in self.paths]
+        self._cover = (depths[0], depths[-1], ranges[0], ranges[-1])
+
+    def _depth_range(self, t_s):
+        r = self.trajectory.position(np.asarray(t_s, dtype=float).reshape(-1))
+        b = np.asarray(self.scenario.beacon.position_m, dtype=float)
+        return -r[2], np.hypot(r[0] - b[0], r[1] - b[1])
+
+    def delays(self, t_s):
+        depth, rng = self._depth_range(t_s)
+        self._ensure(depth, rng)
+        tau = np.array([table.travel_time(depth, rng) for table in self._tables])
+        straight = super().delays(t_s)
+        return np.where(np.isfinite(tau), tau, straight)  # a shadowed path keeps a finite delay; amplitude 0
+
+    def amplitudes(self, t_s, delays):
+        amp = super().amplitudes(t_s, delays)
+        depth, rng = self._depth_range(t_s)
+        traced = np.array([np.isfinite(table.travel_time(depth, rng)) for table in self._tables])
+        return np.where(traced, amp, 0.0)
+
+    def check_span(self, t0_s, t1_s):
+        super().check_span(t0_s, t1_s)
+        depth, rng = self._depth_range(np.linspace(max(t0_s, 0.0), t1_s, 2001))
+        self._ensure(depth, rng)
+
+    def describe(self):
+        return {**super().describe(), "sound_speed_profile": self.profile.to_dict()}
+
+
 class ProfileModel(ChannelModel):
     """Prescribed v_r(t) on a direct path, plus echoes that share it (module docstring).
 
@@ -430,6 +509,8 @@ def build_model(scenario: Scenario, *, reference_frequency_hz: float) -> Channel
     ConfigError
         Any other mode (``replay`` has no path model).
     """
+    if scenario.mode == "geometry" and scenario.water is not None:
+        return RayTracedModel(scenario, reference_frequency_hz=reference_frequency_hz)
     if scenario.mode == "geometry":
         return GeometryModel(scenario, reference_frequency_hz=reference_frequency_hz)
     if scenario.mode == "profile":

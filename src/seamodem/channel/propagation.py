@@ -1,4 +1,4 @@
-"""Propagation helpers: sound speed, absorption, spreading, rough-surface loss.
+"""Propagation helpers: sound speed (Mackenzie, from :mod:`seamodem.water.speed`), absorption, spreading, rough-surface loss.
 
 All in SI units except where the published formula fixes others (Thorp: f in
 kHz, dB/km), which the function names say.
@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..water.speed import sound_speed_mackenzie
+
 __all__ = [
     "sound_speed_mackenzie",
     "thorp_absorption_db_per_km",
@@ -15,53 +17,6 @@ __all__ = [
     "absorption_gain",
     "rough_surface_gain",
 ]
-
-
-def sound_speed_mackenzie(temperature_c, salinity_ppt, depth_m):
-    """Sound speed in sea water, Mackenzie (1981) nine-term equation.
-
-    Parameters
-    ----------
-    temperature_c : float or array_like
-        Temperature T [°C], valid 2–30 °C.
-    salinity_ppt : float or array_like
-        Salinity S [‰ = g/kg], valid 25–40 ‰.
-    depth_m : float or array_like
-        Depth D [m] (positive down), valid 0–8000 m.
-
-    Returns
-    -------
-    float or numpy.ndarray
-        c [m/s].
-
-    Notes
-    -----
-    c = 1448.96 + 4.591 T − 5.304e-2 T² + 2.374e-4 T³ + 1.340 (S − 35)
-    + 1.630e-2 D + 1.675e-7 D² − 1.025e-2 T (S − 35) − 7.139e-13 T D³
-    (K. V. Mackenzie, J. Acoust. Soc. Am. 70(3), 807–812, 1981; standard error
-    0.070 m/s). Check values: c(25 °C, 35 ‰, 1000 m) = 1550.744 m/s (the
-    paper's), c(27 °C, 35 ‰, 10 m) = 1539.09 m/s (SPEC §6).
-
-    Examples
-    --------
-    >>> round(float(sound_speed_mackenzie(25.0, 35.0, 1000.0)), 3)
-    1550.744
-    """
-    t = np.asarray(temperature_c, dtype=float)
-    s = np.asarray(salinity_ppt, dtype=float) - 35.0
-    d = np.asarray(depth_m, dtype=float)
-    c = (
-        1448.96
-        + 4.591 * t
-        - 5.304e-2 * t**2
-        + 2.374e-4 * t**3
-        + 1.340 * s
-        + 1.630e-2 * d
-        + 1.675e-7 * d**2
-        - 1.025e-2 * t * s
-        - 7.139e-13 * t * d**3
-    )
-    return c[()] if c.ndim == 0 else c
 
 
 def thorp_absorption_db_per_km(frequency_hz):

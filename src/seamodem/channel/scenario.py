@@ -18,7 +18,8 @@ Three modes:
 [fluctuation], [noise] and [clock] apply to the first two modes; [noise] to all.
 [two_way] (geometry and profile modes) turns the recording into two-way
 ranging exchanges: the vehicle polls, the beacon's frames are its replies
-(:mod:`seamodem.channel.two_way`).
+(:mod:`seamodem.channel.two_way`). [water] (geometry mode) gives a sound-speed
+profile: the paths are then rays traced through it (:mod:`seamodem.channel.raytraced`).
 
 The tables' dataclasses are in :mod:`.scenario_sections` (every name importable from here too);
 this module assembles them into a :class:`Scenario` and reads the files.
@@ -49,6 +50,10 @@ from .scenario_sections import (
     TwoWay,
     Vehicle,
 )
+from .water_section import Water
+
+#: every table a scenario may hold: those of :mod:`.scenario_sections`, and [water]
+TABLES = {**SECTIONS, Water.SECTION: Water}
 
 __all__ = [
     "read_scenario_tables",
@@ -62,6 +67,7 @@ __all__ = [
     "Clock",
     "Replay",
     "TwoWay",
+    "Water",
     "Scenario",
     "load_scenario",
     "parse_scenario",
@@ -84,7 +90,7 @@ class Scenario:
         Seeds the fading and the noise (two independent streams).
     description : str
         Free text.
-    environment, beacon, vehicle, doppler, multipath, fluctuation, noise, clock, replay, two_way
+    environment, beacon, vehicle, doppler, multipath, fluctuation, noise, clock, replay, two_way, water
         One record per TOML table (:mod:`~seamodem.channel.scenario_sections`); None where the table is
         absent and the mode does not need it.
     base_dir : Path
@@ -110,6 +116,7 @@ class Scenario:
     clock: Clock = field(default_factory=Clock)
     replay: Replay | None = None
     two_way: TwoWay | None = None
+    water: Water | None = None
     base_dir: Path = field(default=Path("."), compare=False)
 
     def __post_init__(self):
@@ -121,8 +128,8 @@ class Scenario:
         for name in needs:
             if getattr(self, name) is None:
                 raise ConfigError(name, f"the [{name}] table is required in {self.mode} mode")
-        unused = {"geometry": ("doppler", "replay"), "profile": ("beacon", "vehicle", "replay"),
-                  "replay": ("beacon", "vehicle", "doppler")}[self.mode]
+        unused = {"geometry": ("doppler", "replay"), "profile": ("beacon", "vehicle", "replay", "water"),
+                  "replay": ("beacon", "vehicle", "doppler", "water")}[self.mode]
         for name in unused:
             if getattr(self, name) is not None:
                 raise ConfigError(name, f"the [{name}] table does not apply in {self.mode} mode")
@@ -160,7 +167,7 @@ class Scenario:
     def to_dict(self) -> dict[str, Any]:
         """The scenario as used (defaults filled in), JSON-ready."""
         out: dict[str, Any] = {"mode": self.mode, "seed": self.seed, "description": self.description}
-        for name in SECTIONS:
+        for name in TABLES:
             section = getattr(self, name)
             if section is not None:
                 out[name] = section.to_dict()
@@ -207,7 +214,7 @@ def parse_scenario(data: dict[str, Any], *, base_dir: str | Path = ".") -> Scena
     """
     if not isinstance(data, dict):
         raise ConfigError("scenario", "must be a table")
-    top = {"mode", "seed", "description", *SECTIONS}
+    top = {"mode", "seed", "description", *TABLES}
     for key in data:
         if key not in top:
             raise ConfigError(key, f"unknown scenario key (known top-level keys and tables: {', '.join(sorted(top))})")
@@ -216,7 +223,7 @@ def parse_scenario(data: dict[str, Any], *, base_dir: str | Path = ".") -> Scena
     kwargs: dict[str, Any] = {k: data[k] for k in ("mode", "seed", "description") if k in data}
     if not isinstance(kwargs.get("description", ""), str):
         raise ConfigError("description", "must be a string")
-    for name, cls in SECTIONS.items():
+    for name, cls in TABLES.items():
         if name in data:
             kwargs[name] = cls.from_table(data[name])
     return Scenario(**kwargs, base_dir=Path(base_dir))

@@ -589,3 +589,5 @@ class TwoWay(_Section):
 
 #: table name → its section class, in the order of a scenario's ``to_dict``
 SECTIONS = {cls.SECTION: cls for cls in (Environment, Beacon, Vehicle, Doppler, Multipath, Fluctuation, Noise, Clock, Replay, TwoWay)}
+#: the tables' base class, for a table defined in its own module (:mod:`.water_section`)
+Section = _Section

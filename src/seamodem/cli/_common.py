@@ -15,7 +15,7 @@ from ..config import FrameConfig, get_preset, load_config
 from ..errors import SeamodemError
 from ..io.files import check_writable
 
-__all__ = ["sound_speed", "sound_speed_words", "add_config_options", "config_from_args", "command_line", "emit_schedule",
+__all__ = ["sound_speed", "sound_speed_words", "add_profile_option", "sound_speed_profile", "add_config_options", "config_from_args", "command_line", "emit_schedule",
            "output_path", "reported_warnings"]
 
 
@@ -40,6 +40,24 @@ def sound_speed_words(value: float, origin: str) -> str:
     if origin == "default":
         return f"c = {value:g} m/s: the default, neither --sound-speed nor the recording's sidecar gave one"
     return f"c = {value:g} m/s from the {origin}"
+
+
+def add_profile_option(parser, *, what: str) -> None:
+    """``--sound-speed-profile CSV`` (and ``--profile-latitude``), for the commands that turn travel time into range."""
+    parser.add_argument("--sound-speed-profile", metavar="CSV",
+                        help="sound-speed or CTD cast (depth_m,c_mps or depth_m|pressure_dbar,temperature_c,"
+                             f"salinity_psu; TEOS-10): {what}")
+    parser.add_argument("--profile-latitude", type=float, default=45.0, metavar="DEG",
+                        help="latitude of the cast [deg], for pressure ↔ depth and TEOS-10 (default 45)")
+
+
+def sound_speed_profile(args):
+    """The profile ``--sound-speed-profile`` names, read and checked (one-line error naming the file), or None."""
+    if not getattr(args, "sound_speed_profile", None):
+        return None
+    from ..water.cast import read_profile
+
+    return read_profile(args.sound_speed_profile, latitude_deg=args.profile_latitude)
 
 
 def add_config_options(parser: argparse.ArgumentParser) -> None:

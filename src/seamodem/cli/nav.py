@@ -12,7 +12,7 @@ from pathlib import Path
 from .._progress import progress_bar
 from ..errors import SeamodemError
 from ..io.files import atomic_outputs
-from ._common import command_line, reported_warnings
+from ._common import add_profile_option, command_line, reported_warnings, sound_speed_profile
 
 TABLE_COLUMNS = ("tcom_s", "filter", "mean_error_m", "error_variance_m2", "etd_max_pct", "etd_mean_pct", "outliers",
                  "diverged", "median_error_m")
@@ -149,6 +149,8 @@ def add_parser(sub) -> None:
                             "the depth at its arrival and --beacon-depth")
     t.add_argument("--beacon-depth", type=float, default=0.0, metavar="M",
                    help="beacon depth [m] with --depth-log (default 0)")
+    add_profile_option(t, what="each frame's tof_s becomes the horizontal range of the ray traced through it "
+                               "(needs --depth or --depth-log)")
     t.add_argument("--filter", choices=("inertial", "inertial-range", "proposed", "rosb"), default="inertial",
                    help="inertial (range and v_r, default), inertial-range (range only), or paper 000's EKF "
                         "'proposed' / its range-only baseline 'rosb' (paper-faithful: R of eq 25, Q = Δt⁸)")
@@ -291,6 +293,7 @@ def run_track(args: argparse.Namespace) -> int:
             depths=args.depth,
             depth_log=args.depth_log,
             beacon_depth_m=args.beacon_depth,
+            sound_speed_profile=sound_speed_profile(args),
             fixes=args.fixes,
             filter=args.filter,
             r_from_records=args.r_from_records,

@@ -22,11 +22,13 @@ from ..errors import ConfigError, InputFileError, SeamodemError
 from ..io.files import check_writable
 from ._common import (
     add_config_options,
+    add_profile_option,
     command_line,
     config_from_args,
     emit_schedule,
     reported_warnings,
     sound_speed,
+    sound_speed_profile,
     sound_speed_words,
 )
 
@@ -59,6 +61,13 @@ def add_parser(sub) -> None:
                    help="c (default: the recording's sidecar's, else 1500 m/s; 1400-1600 m/s unless forced)")
     p.add_argument("--force-sound-speed", action="store_true",
                    help="accept a --sound-speed (or sidecar value) outside 1400-1600 m/s")
+    g = p.add_argument_group("sound-speed profile")
+    add_profile_option(g, what="range_m becomes the straight-line distance of the direct ray traced through it, "
+                               "horizontal_range_m its horizontal range, c for Doppler the profile's at the vehicle "
+                               "(needs --beacon-depth and --vehicle-depth; with the depths alone, a simulated "
+                               "recording's [water] profile from its sidecar)")
+    g.add_argument("--beacon-depth", type=float, metavar="M", help="beacon depth [m], with --sound-speed-profile")
+    g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m], with --sound-speed-profile")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
         "--turnaround",
@@ -188,9 +197,27 @@ def _frame_emissions(args, recording: str, sidecar, duration_s: float):
     return Emissions(times_s=times)
 
 
-def _settings(args, sidecar: dict | None):
+def _water_profile(args, profile, sidecar: dict | None):
+    """The profile of --sound-speed-profile, else (with both depths given) the simulated recording's sidecar's."""
+    depths = (args.beacon_depth, args.vehicle_depth)
+    if profile is None and depths == (None, None):
+        return None
+    if None in depths:
+        raise SeamodemError("sound-speed-profile: needs --beacon-depth and --vehicle-depth (the ray joins the two)")
+    if profile is None:
+        traced = (((sidecar or {}).get("channel") or {}).get("model") or {}).get("sound_speed_profile")
+        if traced is None:
+            raise SeamodemError("beacon-depth: depths turn travel time into range along a ray: give "
+                                "--sound-speed-profile (the recording's sidecar has no [water] profile)")
+        from ..water import SoundSpeedProfile
+
+        profile = SoundSpeedProfile.from_dict(traced, where="sidecar channel.model.sound_speed_profile")
+    return profile
+
+
+def _settings(args, sidecar: dict | None, profile=None):
     """The options (and the sidecar's channel section) as the receiver's settings, built here once, and
-    where their sound speed came from."""
+    where their sound speed came from (with a profile and no --sound-speed: the profile's c at the vehicle)."""
     from ..receive.settings import ReceiverSettings
 
     channel = (sidecar or {}).get("channel") or {}
@@ -202,6 +229,8 @@ def _settings(args, sidecar: dict | None):
         if not args.quiet:
             print(f"two-way recording: turnaround {turnaround:g} s from its sidecar")
     c, origin = sound_speed(args, sidecar)
+    if profile is not None and args.sound_speed is None:
+        c, origin = float(profile.c(args.vehicle_depth)), f"sound-speed profile at the vehicle's {args.vehicle_depth:g} m"
     return ReceiverSettings(
         sound_speed_mps=c,
         clock_offset_s=args.clock_offset,
@@ -225,6 +254,7 @@ class _Inputs(NamedTuple):
     pilot: object
     payloads: list | None
     sound_speed_origin: str
+    profile: object = None
 
 
 def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
@@ -233,20 +263,22 @@ def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
     from ..io.source import open_recording
 
     # a .mat recording: its variable and, when it holds none, its rate (the same options as --reference)
+    profile = sound_speed_profile(args)
     source = open_recording(recording, mat_variable=getattr(args, "mat_variable", None),
                             sample_rate_hz=getattr(args, "sample_rate", None))
     source.one_channel(0 if args.array else args.channel)
     sidecar, own = _sidecar_for(args.config, recording)
+    profile = _water_profile(args, profile, sidecar)
     config = config_from_args(args, config_file=str(sidecar_path(recording)) if own else None)
     emissions = _frame_emissions(args, recording, sidecar, source.duration_s)
     pilot = None
     bits = sidecar_pilot_bits(sidecar) if sidecar is not None else None
     if bits is not None and bits.size == config.n_pilot:
         pilot = (1.0 - 2.0 * bits).astype(complex)
-    settings, origin = _settings(args, sidecar)
+    settings, origin = _settings(args, sidecar, profile)
     # an older or hand-made sidecar without payloads: decode without counting bit errors
     payloads = sidecar_payloads(sidecar) if sidecar is not None and settings.decode else None
-    return _Inputs(recording, source, config, emissions, settings, pilot, payloads, origin)
+    return _Inputs(recording, source, config, emissions, settings, pilot, payloads, origin, profile)
 
 
 def _described(inputs: _Inputs) -> dict:
@@ -280,6 +312,8 @@ def run(args: argparse.Namespace) -> int:
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
     if batch and args.array:
         raise SeamodemError("array: a hydrophone array is received from a single recording (give one file)")
+    if batch and (args.sound_speed_profile or args.beacon_depth is not None or args.vehicle_depth is not None):
+        raise SeamodemError("sound-speed-profile: applied to a single recording only (give one file)")
     if batch and args.plot:
         raise SeamodemError("plot: figures are drawn for a single recording only (drop --plot, or give one file)")
     if args.workers is not None and args.workers < 1:
@@ -312,6 +346,11 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
             records = receive_file(inputs.source, inputs.config, emissions=inputs.emissions, settings=inputs.settings,
                                    channel=args.channel, pilot=inputs.pilot, payloads=inputs.payloads,
                                    on_frame=on_frame, progress=False if args.quiet else None)
+        if inputs.profile is not None:
+            records = _along_the_ray(records, inputs, args)
+            header |= {"sound_speed_profile": inputs.profile.to_dict(), "beacon_depth_m": args.beacon_depth,
+                       "vehicle_depth_m": args.vehicle_depth,
+                       "range_m": "straight-line distance of the direct ray traced through the profile"}
         counted = _Counted(records)
         try:
             n = write_measurements(out, counted, header)
@@ -328,6 +367,27 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
                 line += f"; bit error rate {counted.ber_sum / counted.ber_frames:.2e} after decoding"
             print(line)
     return 0
+
+
+def _along_the_ray(records, inputs: _Inputs, args):
+    """Each record's tof_s turned into ranges along the ray traced through the profile (σ carried over)."""
+    import dataclasses
+
+    from ..water.ranging import ProfileRanging
+
+    c_max = float(inputs.profile.c_mps.max())
+    ranging = ProfileRanging(inputs.profile, args.beacon_depth, [args.vehicle_depth],
+                             max_range_m=min(inputs.source.duration_s * c_max, 20_000.0) + 10.0)
+    c = inputs.settings.sound_speed_mps
+    for rec in records:
+        if math.isfinite(rec.tof_s):
+            r = float(ranging.horizontal_range(rec.tof_s, args.vehicle_depth))
+            if math.isfinite(r):
+                slant = float(ranging.slant_range(rec.tof_s, args.vehicle_depth))
+                per_s = float(ranging.range_per_second(rec.tof_s, args.vehicle_depth)) * r / max(slant, 1e-9)
+                rec = dataclasses.replace(rec, range_m=slant, horizontal_range_m=r,
+                                          sigma_range_m=rec.sigma_range_m / c * per_s)
+        yield rec
 
 
 def _warn_unmatched(times_s: list[float]) -> None:

@@ -112,16 +112,21 @@ def _normalise_sigma_columns(meas: dict) -> dict:
     return meas
 
 
-def _horizontal_ranges(meas: dict, depths, depth_log, beacon_depth_m) -> np.ndarray:
+def _horizontal_ranges(meas: dict, depths, depth_log, beacon_depth_m, profile=None) -> np.ndarray:
     ranges = np.asarray(meas["range_m"], dtype=float)
     if depths is not None and depth_log is not None:
         raise ConfigError("depths", "give either fixed depths or a depth log, not both")
-    if depths is not None:
-        return slant_to_horizontal(ranges, *depths)
-    if depth_log is not None:
-        vehicle = depth_at(depth_log, meas["t_arrival_s"])
-        return slant_to_horizontal(ranges, vehicle, beacon_depth_m)
-    return ranges
+    if depths is None and depth_log is None:
+        if profile is not None:
+            raise ConfigError("sound_speed_profile", "needs the depths of both ends (--depth or --depth-log)")
+        return ranges
+    vehicle, beacon = depths if depths is not None else (depth_at(depth_log, meas["t_arrival_s"]), beacon_depth_m)
+    if profile is None:
+        return slant_to_horizontal(ranges, vehicle, beacon)
+    from ..water.ranging import ProfileRanging  # travel time along the traced ray → horizontal range
+
+    vehicle = np.broadcast_to(np.asarray(vehicle, dtype=float), ranges.shape)
+    return ProfileRanging.for_records(profile, beacon, vehicle, meas["tof_s"]).horizontal_range(meas["tof_s"], vehicle)
 
 
 def _check_positive(name, value):
@@ -130,7 +135,8 @@ def _check_positive(name, value):
 
 
 def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0, filter="inertial",
-              r_from_records=False, depths=None, depth_log=None, beacon_depth_m=0.0, smooth=None, lag_s=None,
+              r_from_records=False, depths=None, depth_log=None, beacon_depth_m=0.0, sound_speed_profile=None,
+              smooth=None, lag_s=None,
               config=None, range_floor_m=RANGE_FLOOR_M, v_r_floor_mps=V_R_FLOOR_MPS, sigma_range_m=None,
               sigma_v_r_mps=None, start_sigma_m=1.0, fixes=None, use_bearing=True,
               bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
@@ -159,6 +165,9 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
     depth_log : dict, optional
         ``t_s``, ``depth_m`` of the vehicle (:func:`~.logs.read_depth`): each frame's slant range becomes
         horizontal with the vehicle's depth at its arrival time and ``beacon_depth_m``.
+    sound_speed_profile : SoundSpeedProfile, optional
+        With the depths: each frame's ``tof_s`` becomes the horizontal range of the direct ray traced
+        through it (:class:`~seamodem.water.ranging.ProfileRanging`) instead of ``range_m`` made horizontal.
     smooth : {None, "batch", "fixed-lag"} or bool
         Inertial filters: the batch smoother over the whole mission or the fixed-lag smoother (``lag_s``).
         Paper filters: ``True`` or ``"batch"`` is their Rauch-Tung-Striebel smoother (as before).
@@ -195,7 +204,7 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
     if smooth not in SMOOTHERS:
         raise ConfigError("smooth", f"must be None, 'batch' or 'fixed-lag', got {smooth!r}")
     meas = _normalise_sigma_columns(meas)
-    ranges = _horizontal_ranges(meas, depths, depth_log, beacon_depth_m)
+    ranges = _horizontal_ranges(meas, depths, depth_log, beacon_depth_m, sound_speed_profile)
     if filter in ("proposed", "rosb"):
         if smooth == "fixed-lag":
             raise ConfigError("smooth", f"the fixed-lag smoother needs an inertial filter, not {filter!r}")
@@ -454,7 +463,8 @@ def _error_stats(t, state, cov, truth_cols, truth_path):
 
 
 def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, geodetic=False, depths=None,
-                     depth_log=None, beacon_depth_m=0.0, filter="inertial", r_from_records=False, smooth=None,
+                     depth_log=None, beacon_depth_m=0.0, sound_speed_profile=None, filter="inertial",
+                     r_from_records=False, smooth=None,
                      lag_s=None, config=None, range_floor_m=RANGE_FLOOR_M, v_r_floor_mps=V_R_FLOOR_MPS,
                      sigma_range_m=None, sigma_v_r_mps=None, start_sigma_m=1.0, fixes=None, truth=None,
                      command=None, output, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> str:
@@ -463,7 +473,8 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
     The readers are :func:`~.logs.read_measurements`, :func:`~.logs.read_imu`, :func:`~.logs.read_fixes`
     and :func:`~.logs.read_depth`: what they repair is a :class:`~.logs.LogWarning` (one line each), what
     they cannot a one-line error. See :func:`run_track` for the other parameters; ``depth_log``,
-    ``fixes`` and ``truth`` are file paths here, ``command`` the command line for the sidecar.
+    ``fixes`` and ``truth`` are file paths here, ``command`` the command line for the sidecar,
+    ``sound_speed_profile`` a :class:`~seamodem.water.SoundSpeedProfile`.
     """
     out = check_writable(output)
     if out.suffix.lower() != ".csv":
@@ -495,7 +506,8 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
     depth_cols = read_depth(depth_log) if depth_log is not None else None
     result = run_track(meas, samples, beacon_xy=beacon_xy, start_xy=start_xy, start_speed_mps=start_speed_mps,
                        filter=filter, r_from_records=r_from_records, depths=depths, depth_log=depth_cols,
-                       beacon_depth_m=beacon_depth_m, smooth=smooth, lag_s=lag_s, config=config,
+                       beacon_depth_m=beacon_depth_m, sound_speed_profile=sound_speed_profile, smooth=smooth,
+                       lag_s=lag_s, config=config,
                        range_floor_m=range_floor_m, v_r_floor_mps=v_r_floor_mps, sigma_range_m=sigma_range_m,
                        sigma_v_r_mps=sigma_v_r_mps, start_sigma_m=start_sigma_m, fixes=fix_cols,
                        use_bearing=use_bearing, bearing_floor_rad=bearing_floor_rad)
@@ -521,7 +533,8 @@ def track_from_files(measurements, imu, *, beacon, start, start_speed_mps=0.0, g
                "inputs": {"measurements": str(measurements), "imu": str(imu), "fixes": fixes and str(fixes),
                           "depth_log": depth_log and str(depth_log), "truth": truth and str(truth),
                           "beacon": beacon, "start": start, "geodetic": bool(geodetic),
-                          "beacon_depth_m": beacon_depth_m if depth_log is not None else None},
+                          "beacon_depth_m": beacon_depth_m if depth_log is not None else None,
+                          "sound_speed_profile": sound_speed_profile.source if sound_speed_profile else None},
                "outputs": {"track": str(out), "frames": str(frames_path(out)), "plot": str(out.with_suffix(".png"))},
                "frames": {"records": int(frames["status"].size), **counts},
                "states": list(names)}

@@ -156,6 +156,10 @@ class MeasurementRecord:
         fit; NaN without). Beyond what a vehicle does (|·| > 0.5 m/s²) it is
         phase wander that is not Doppler (fading, a merged echo): ``sigma_v_r_mps``
         then carries it.
+    horizontal_range_m : float
+        Horizontal range [m] of the direct ray traced through a sound-speed profile whose travel
+        time is ``tof_s`` (``rx --sound-speed-profile`` with both depths; ``range_m`` is then that
+        ray's straight-line distance √(R² + Δz²)); NaN without a profile.
     """
 
     frame_index: int
@@ -194,6 +198,7 @@ class MeasurementRecord:
     n_paths: int = 0
     blanked_fraction: float = math.nan
     v_r_drift_mps2: float = math.nan
+    horizontal_range_m: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)

@@ -1,0 +1,76 @@
+"""``seamodem rx --sound-speed-profile``: the time of flight stays; the ranges become those along the traced ray."""
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_cli_rx import beacon  # noqa: F401  (the fixture: a beacon's frames delayed by about 300 m)
+
+from seamodem import BeaconSchedule, get_preset, write_beacon
+from seamodem.channel import parse_scenario, simulate_file
+from seamodem.cli import main
+from seamodem.receive import read_measurements
+from seamodem.water import RayTracer, SoundSpeedProfile
+
+
+
+@pytest.fixture(scope="module")
+def delayed(beacon):
+    """test_cli_rx's delayed beacon (about 300 m), with a thermocline's sound-velocity cast beside it."""
+    d = beacon[0]
+    (d / "svp.csv").write_text("depth_m,c_mps\n0,1530\n15,1530\n35,1490\n")
+    return d
+
+
+def test_ranges_along_the_ray(delayed, tmp_path):
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(delayed / "delayed.wav"), "-o", str(out), "-q", "--sound-speed-profile",
+                 str(delayed / "svp.csv"), "--beacon-depth", "25", "--vehicle-depth", "5"]) == 0
+    recs, header = read_measurements(out)
+    assert header["sound_speed_profile"]["c_mps"] == [1530.0, 1530.0, 1490.0] and header["vehicle_depth_m"] == 5.0
+    assert header["sound_speed_mps"] == 1530.0  # Doppler with c at the vehicle
+    tracer = RayTracer(SoundSpeedProfile([0, 15, 35], [1530, 1530, 1490]))
+    for r in recs:
+        ray = tracer.eigenrays(25.0, 5.0, r.horizontal_range_m)[0]
+        # the direct ray at that horizontal range takes tof_s (the table interpolates to nanoseconds)
+        assert ray.name == "direct" and abs(ray.travel_time_s - r.tof_s) < 1e-8
+        assert r.range_m == pytest.approx(np.hypot(r.horizontal_range_m, 20.0), abs=1e-9)
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--beacon-depth", "25"], "needs --beacon-depth and --vehicle-depth"),
+    (["--beacon-depth", "25", "--vehicle-depth", "5", "--sound-speed-profile", "missing.csv"], "no such"),
+])
+def test_one_line_errors(delayed, tmp_path, capsys, extra, words):
+    argv = ["rx", str(delayed / "delayed.wav"), "-o", str(tmp_path / "m.csv"), "-q"]
+    if "--sound-speed-profile" not in extra:
+        extra = extra + ["--sound-speed-profile", str(delayed / "svp.csv")]
+    assert main(argv + extra) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and words in err and not (tmp_path / "m.csv").exists()
+
+
+def test_the_depths_alone_take_the_profile_of_a_simulated_recording(tmp_path):
+    d = tmp_path
+    shutil.copy(Path(__file__).resolve().parents[2] / "examples" / "water" / "thermocline_svp.csv", d / "svp.csv")
+    write_beacon(d / "b.wav", get_preset("jmse2024"), BeaconSchedule(count=2, period_s=1.0, start_s=0.1), progress=False)
+    scenario = parse_scenario({"mode": "geometry", "environment": {"water_depth_m": 60.0, "sound_speed_mps": 1500.0},
+                               "beacon": {"position_m": [0.0, 0.0, -25.0]},
+                               "vehicle": {"start_m": [300.0, 0.0, -5.0], "velocity_mps": [0.0, 0.0, 0.0]},
+                               "water": {"profile": "svp.csv"}, "noise": {"kind": "white", "snr_db": 30.0}},
+                              base_dir=d)
+    simulate_file(d / "b.wav", scenario, d / "r.wav", progress=False)
+    out = d / "m.csv"
+    assert main(["rx", str(d / "r.wav"), "-o", str(out), "-q", "--beacon-depth", "25", "--vehicle-depth", "5"]) == 0
+    recs, header = read_measurements(out)
+    assert header["sound_speed_profile"]["c_mps"][0] == 1530.0
+    # a still vehicle 300 m away: the ray-traced channel and the receiver's ray agree to the receiver's accuracy
+    assert all(abs(r.horizontal_range_m - 300.0) < 0.01 for r in recs)
+
+
+def test_the_depths_without_any_profile_are_refused(beacon, tmp_path, capsys):
+    assert main(["rx", str(beacon[2]), "-o", str(tmp_path / "m.csv"), "-q", "--beacon-depth", "25",
+                 "--vehicle-depth", "5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "has no [water] profile" in err
