@@ -71,8 +71,9 @@ def test_fading_direct_path_sigma_covers_its_doppler_and_arrival_errors():
     wander is smooth over the frame, its residual small). With the log-amplitude rate term alone: 0.93,
     worst 14σ (one frame's amplitude is one draw of the rate's scale, the phase's error another). With
     the two-carrier term (the tone's speed error is 1.4× the data band's for a carrier-independent phase
-    wander, a true Doppler none): ≥ 0.95 within 3σ and none beyond 6σ, for v_r and the arrival, and the σ
-    is not blanket inflated (RMS err/σ ≥ 0.6)."""
+    wander, a true Doppler none): ≥ 0.95 within 3σ and none beyond 6σ, for v_r and the arrival (measured
+    1.00 and 1.00, worst 2.8σ and 2.7σ; the arrival with the fit's σ alone 0.88, worst 3.9σ), and the σ is
+    not blanket inflated (RMS err/σ ≥ 0.6; measured 1.17 and 1.02)."""
     rng = np.random.default_rng(2511)
     zv, zv_own, zt = [], [], []
     for _ in range(60):
