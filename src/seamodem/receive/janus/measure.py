@@ -1,0 +1,205 @@
+"""Arrival time and time scale of a JANUS packet from its known chips (preamble, or the whole decoded packet).
+
+Every chip is a known tone with a known phase: the transmitter's phasor runs on from chip to chip.
+The received baseband is modelled as A·e^{jθ}·s((1 + ε)(t − τ))·e^{j2π fc ε (t − τ)} + noise, with
+τ the arrival of the first preamble chip. Each chip's complex correlation c_i with the model moves,
+for small changes δτ and δε, by the phase 2π f_i δτ − 2π (fc·(t_i − τ) + f_i·(t_i − τ − b_i)) δε
+(f_i its tone about fc, t_i its centre, b_i its start). A grid over (δτ, δε) finds the peak of
+|Σ c_i e^{jφ_i}|; weighted least squares on the chips' residual phases then gives the estimate and
+its covariance, the phase variance of each chip being N0/(2 A² E_i) with N0 measured from the
+residual after the fit (so that misfit, echoes and impulses widen σ).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...transmit.janus import JanusParameterSet, chip_bounds, chip_envelope
+
+__all__ = ["ChipCorrelations", "chip_correlations", "ScaleDelayFit", "fit_delay_scale"]
+
+
+@dataclass(frozen=True)
+class ChipCorrelations:
+    """Correlations of known chips with the received baseband.
+
+    Attributes
+    ----------
+    c : numpy.ndarray, complex, shape (n,)
+    energy : numpy.ndarray, shape (n,)
+        Σ|model|² over each chip's samples.
+    rx_energy : numpy.ndarray, shape (n,)
+        Σ|r|² over the same samples.
+    n_samples : numpy.ndarray, shape (n,)
+    f_hz : numpy.ndarray, shape (n,)
+        Tone of each chip about fc [Hz].
+    t_rel_s, t_in_chip_s : numpy.ndarray, shape (n,)
+        Chip centre relative to τ, and relative to its own start [s].
+    """
+
+    c: np.ndarray
+    energy: np.ndarray
+    rx_energy: np.ndarray
+    n_samples: np.ndarray
+    f_hz: np.ndarray
+    t_rel_s: np.ndarray
+    t_in_chip_s: np.ndarray
+
+
+def chip_correlations(
+    x_bb: np.ndarray, fs_bb: float, tones: np.ndarray, pset: JanusParameterSet, fs_tx: float, tau_s: float, eps: float,
+    first: int = 0,
+) -> ChipCorrelations:
+    """Correlate chips ``first`` … ``len(tones) − 1`` of a packet with the received baseband.
+
+    Parameters
+    ----------
+    x_bb : numpy.ndarray
+        Baseband about fc, sample m at m / fs_bb [s].
+    fs_bb : float
+        Its rate [Hz].
+    tones : numpy.ndarray, shape (n_chips,)
+        Tone index of every chip from the first preamble chip (its phase depends on all before).
+    pset : JanusParameterSet
+        Parameter set.
+    fs_tx : float
+        The transmitter's sample rate (its phasor steps once per sample before output) [Hz].
+    tau_s : float
+        Arrival of the first preamble chip [s].
+    eps : float
+        Time scale ε.
+    first : int
+        First chip to correlate.
+    """
+    offsets = np.asarray(pset.tone_offsets_hz(), dtype=np.float64)
+    f = offsets[np.asarray(tones)]
+    bounds = chip_bounds(len(tones), pset.chip_s, fs_tx)
+    lengths = np.diff(bounds)
+    phase0 = np.concatenate([[0.0], np.cumsum(2 * np.pi * f[:-1] * lengths[:-1] / fs_tx)])
+    lt = int(round(pset.chip_s * fs_tx))
+    idx = np.arange(first, len(tones))
+    b_s = bounds[idx] / fs_tx
+    len_s = lengths[idx] / fs_tx
+    n_win = int(np.ceil(pset.chip_s * fs_bb / (1 + eps))) + 2
+    m0 = np.floor((tau_s + b_s / (1 + eps)) * fs_bb).astype(np.int64)
+    m = m0[:, None] + np.arange(n_win)[None, :]
+    t = m / fs_bb
+    u = (1 + eps) * (t - tau_s) - b_s[:, None]
+    inside = (u >= 0) & (u < len_s[:, None]) & (m >= 0) & (m < len(x_bb))
+    env_len = int(lengths.max())
+    env = chip_envelope(env_len, lt) if len(set(lengths.tolist())) == 1 else None
+    if env is None:
+        env_u = np.zeros_like(u)
+        for row, i in enumerate(idx):
+            e = chip_envelope(int(lengths[i]), lt)
+            env_u[row] = np.interp(u[row] * fs_tx, np.arange(e.size), e)
+    else:
+        env_u = np.interp(u * fs_tx, np.arange(env.size), env)
+    model = env_u * np.exp(1j * (np.mod(phase0[idx], 2 * np.pi)[:, None] + 2 * np.pi * f[idx, None] * (u + 1 / fs_tx)
+                                 + 2 * np.pi * pset.fc_hz * eps * (t - tau_s)))
+    model[~inside] = 0
+    r = x_bb[np.clip(m, 0, len(x_bb) - 1)] * inside
+    c = np.sum(r * np.conj(model), axis=1)
+    t_mid = tau_s + (b_s + len_s / 2) / (1 + eps)
+    return ChipCorrelations(
+        c=c, energy=np.sum(np.abs(model) ** 2, axis=1), rx_energy=np.sum(np.abs(r) ** 2, axis=1),
+        n_samples=inside.sum(axis=1), f_hz=f[idx], t_rel_s=t_mid - tau_s, t_in_chip_s=len_s / 2,
+    )
+
+
+@dataclass(frozen=True)
+class ScaleDelayFit:
+    """Delay and time scale of a packet from its known chips.
+
+    Attributes
+    ----------
+    tau_s, eps : float
+        Arrival of the first preamble chip [s] and time scale.
+    sigma_tau_s, sigma_eps : float
+        Their standard deviations.
+    amplitude : float
+        |A| (baseband units).
+    n0 : float
+        Noise energy per baseband sample, from the residual.
+    snr_chip : float
+        Mean chip energy over N0 (Es/N0, linear).
+    rho : float
+        |Σ c_i| / √(Σ E_i · Σ |r|²): 1 for a clean packet.
+    """
+
+    tau_s: float
+    eps: float
+    sigma_tau_s: float
+    sigma_eps: float
+    amplitude: float
+    n0: float
+    snr_chip: float
+    rho: float
+
+
+def _regressors(cc: ChipCorrelations, fc_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Phase change per unit δτ and per unit δε of each chip's correlation."""
+    d_tau = 2 * np.pi * cc.f_hz
+    d_eps = -2 * np.pi * (fc_hz * cc.t_rel_s + cc.f_hz * cc.t_in_chip_s)
+    return d_tau, d_eps
+
+
+def _grid_peak(cc: ChipCorrelations, fc_hz: float, tau_span: float, eps_span: float, n_tau: int, n_eps: int):
+    d_tau, d_eps = _regressors(cc, fc_hz)
+    taus = np.linspace(-tau_span, tau_span, n_tau)
+    epss = np.linspace(-eps_span, eps_span, n_eps)
+    # |Σ c_i e^{j(d_tau δτ + d_eps δε)}| on the grid: one complex matrix product per axis
+    a = np.exp(1j * np.outer(taus, d_tau))
+    b = np.exp(1j * np.outer(d_eps, epss))
+    p = np.abs((a * cc.c[None, :]) @ b)
+    i, j = np.unravel_index(np.argmax(p), p.shape)
+    return taus[i], epss[j]
+
+
+def fit_delay_scale(
+    x_bb: np.ndarray, fs_bb: float, tones: np.ndarray, pset: JanusParameterSet, fs_tx: float, tau_s: float, eps: float,
+    *, tau_span_s: float, eps_span: float,
+) -> ScaleDelayFit:
+    """Fit τ and ε of a packet whose chips ``tones`` are known, starting from (τ, ε) ± the spans.
+
+    Returns
+    -------
+    ScaleDelayFit
+    """
+    fc = pset.fc_hz
+    duration = len(tones) * pset.chip_s
+    for _ in range(3):
+        cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
+        # steps: a tenth of a cycle of the highest tone in delay, of the carrier over the packet in scale
+        n_tau = int(min(max(2 * tau_span_s * pset.used_band_hz * 10, 3), 401)) | 1
+        n_eps = int(min(max(2 * eps_span * fc * duration * 10, 3), 401)) | 1
+        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps)
+        tau_s, eps = tau_s + d_tau, eps + d_eps
+        tau_span_s = 2 * tau_span_s / max(n_tau - 1, 1)
+        eps_span = 2 * eps_span / max(n_eps - 1, 1)
+    cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
+    d_tau, d_eps = _regressors(cc, fc)
+    amp_c = np.sum(cc.c) / np.sum(cc.energy)
+    theta = np.angle(amp_c)
+    amplitude = abs(amp_c)
+    resid_phase = np.angle(cc.c * np.exp(-1j * theta))
+    # residual energy: Σ|r|² − |A|²·Σ E over the chips' samples (the fitted model removed)
+    n0 = max((np.sum(cc.rx_energy) - amplitude**2 * np.sum(cc.energy)) / max(np.sum(cc.n_samples), 1), 1e-300)
+    w = 2 * amplitude**2 * cc.energy / n0
+    h = np.column_stack([np.ones_like(d_tau), -d_tau, -d_eps])
+    info = h.T @ (w[:, None] * h)
+    cov = np.linalg.pinv(info)
+    delta = cov @ (h.T @ (w * resid_phase))
+    # phase residual scatter beyond its expected N0 widens σ (misfit, echoes)
+    res = resid_phase - h @ delta
+    chi2 = float(np.sum(w * res**2) / max(len(res) - 3, 1))
+    cov = cov * max(chi2, 1.0)
+    tau_s = tau_s + delta[1]
+    eps = eps + delta[2]
+    rho = abs(np.sum(cc.c)) / np.sqrt(np.sum(cc.energy) * np.sum(cc.rx_energy))
+    return ScaleDelayFit(
+        tau_s=float(tau_s), eps=float(eps), sigma_tau_s=float(np.sqrt(cov[1, 1])), sigma_eps=float(np.sqrt(cov[2, 2])),
+        amplitude=float(amplitude), n0=float(n0), snr_chip=float(amplitude**2 * np.mean(cc.energy) / n0), rho=float(rho),
+    )
