@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+from scipy.fft import fft
 
 from ...transmit.janus import PREAMBLE_BITS, JanusParameterSet, hop_slots
 
@@ -42,41 +44,41 @@ class JanusCandidate:
     statistic: float
 
 
-def tone_shares(x_bb: np.ndarray, fs_bb: float, pset: JanusParameterSet, n_chip: int) -> np.ndarray:
-    """Share of each tone in the energy of the chip-long window starting at each sample.
+def tone_shares(x_bb: np.ndarray, fs_bb: float, pset: JanusParameterSet, n_chip: int, step: int = 1) -> np.ndarray:
+    """Share of each tone in the energy of the chip-long windows starting at samples 0, step, 2·step, …
 
     Returns
     -------
-    numpy.ndarray, shape (26, n_samples − n_chip + 1), float32
+    numpy.ndarray, shape (26, n_windows), float32
     """
-    offsets = np.asarray(pset.tone_offsets_hz(), dtype=np.float64)
-    # tone k makes k − Q whole cycles per spacing period: its oscillator repeats every fs_bb/cf samples
-    period = int(round(fs_bb / pset.chip_hz))
-    lo = np.exp(-2j * np.pi * np.outer(offsets, np.arange(period)) / fs_bb)
-    reps = -(-len(x_bb) // period)
-    y = x_bb[None, :] * np.tile(lo, reps)[:, : len(x_bb)]
-    c = np.concatenate([np.zeros((len(offsets), 1), dtype=complex), np.cumsum(y, axis=1)], axis=1)
-    e = np.abs(c[:, n_chip:] - c[:, :-n_chip]) ** 2
+    if len(x_bb) < n_chip:
+        return np.zeros((2 * pset.n_slots, 0), dtype=np.float32)
+    windows = sliding_window_view(x_bb, n_chip)[::step]
+    # tone k sits on bin (k − Q)·n_chip·cf/fs_bb of an n_chip-point DFT
+    bins = np.round(np.asarray(pset.tone_offsets_hz()) * n_chip / fs_bb).astype(np.int64) % n_chip
+    e = np.abs(fft(windows, axis=1)[:, bins].T) ** 2
     total = e.sum(axis=0)
     return (e / np.maximum(total, 1e-300)).astype(np.float32)
 
 
 def preamble_statistic(shares: np.ndarray, pset: JanusParameterSet, n_chip: int, eps: np.ndarray, step: int = 1):
-    """Preamble statistic on starts 0, step, 2·step, … for each time scale in ``eps``.
+    """Preamble statistic at each window of ``shares`` (windows ``step`` samples apart) for each time scale in ``eps``.
 
     Returns
     -------
-    numpy.ndarray, shape (len(eps), n_starts)
+    stat : numpy.ndarray, shape (len(eps), n_starts)
+    starts : numpy.ndarray, shape (n_starts,)
+        Start sample of each, relative to the first window.
     """
     tones = 2 * hop_slots(32, pset) + PREAMBLE_BITS
-    n_valid = shares.shape[1] - int(np.ceil(31 * n_chip / (1 + min(eps)))) - 1
-    starts = np.arange(0, max(n_valid, 0), step)
-    out = np.zeros((len(eps), starts.size), dtype=np.float32)
+    n_valid = shares.shape[1] - int(np.ceil(31 * n_chip / (1 + min(eps)) / step)) - 1
+    n_starts = max(n_valid, 0)
+    out = np.zeros((len(eps), n_starts), dtype=np.float32)
     for j, e in enumerate(eps):
-        offs = np.round(np.arange(32) * n_chip / (1 + e)).astype(np.int64)
+        offs = np.round(np.arange(32) * n_chip / (1 + e) / step).astype(np.int64)
         for i in range(32):
-            out[j] += shares[tones[i], starts + offs[i]]
-    return out * (shares.shape[0] / 32), starts
+            out[j] += shares[tones[i], offs[i] : offs[i] + n_starts]
+    return out * (shares.shape[0] / 32), np.arange(n_starts) * step
 
 
 def find_preambles(
@@ -112,12 +114,14 @@ def find_preambles(
     n_chip = int(round(pset.chip_s * fs_bb))
     if len(x_bb) < 33 * n_chip:
         return []
-    shares = tone_shares(x_bb, fs_bb, pset, n_chip)
+    shares = tone_shares(x_bb, fs_bb, pset, n_chip, _COARSE_STEP)
     eps_max = v_max_mps / sound_speed_mps
     # the preamble's last chip moves 31·n_chip·ε samples: one hypothesis per 2 samples of it
     n_eps = 2 * int(np.ceil(31 * n_chip * eps_max / 2)) + 1
     eps = np.linspace(-eps_max, eps_max, n_eps)
     stat, starts = preamble_statistic(shares, pset, n_chip, eps, step=_COARSE_STEP)
+    if not starts.size:
+        return []
     best = stat.max(axis=0)
     above = np.flatnonzero(best > threshold)
     found = []
@@ -128,17 +132,18 @@ def find_preambles(
         above = above[np.abs(above - k) > guard]
     out = []
     for k in sorted(found):
-        out.append(_refine(shares, pset, n_chip, int(starts[k]), float(eps[np.argmax(stat[:, k])]), eps[1] - eps[0]
-                           if n_eps > 1 else 0.0))
+        deps = eps[1] - eps[0] if n_eps > 1 else 0.0
+        out.append(_refine(x_bb, fs_bb, pset, n_chip, int(starts[k]), float(eps[np.argmax(stat[:, k])]), deps))
     return out
 
 
-def _refine(shares, pset, n_chip, start, eps0, deps) -> JanusCandidate:
-    """Best start (to the sample) and scale (to a fifth of the bank's step) near a coarse candidate."""
-    eps = eps0 + deps * np.linspace(-0.6, 0.6, 7)
+def _refine(x_bb, fs_bb, pset, n_chip, start, eps0, deps) -> JanusCandidate:
+    """Best start (to the sample) and scale (to a sixth of the bank's step) near a coarse candidate."""
+    eps = eps0 + deps * np.linspace(-1, 1, 13)
     lo = max(start - _COARSE_STEP, 0)
-    sub = shares[:, lo:]
-    stat, starts = preamble_statistic(sub, pset, n_chip, eps, step=1)
+    hi = lo + 2 * _COARSE_STEP + int(np.ceil(32 * n_chip / (1 + eps.min()))) + 2
+    shares = tone_shares(x_bb[lo:hi], fs_bb, pset, n_chip)
+    stat, starts = preamble_statistic(shares, pset, n_chip, eps, step=1)
     stat = stat[:, : 2 * _COARSE_STEP + 1]
     j, k = np.unravel_index(np.argmax(stat), stat.shape)
     return JanusCandidate(start=float(lo + starts[k]), scale_eps=float(eps[j]), statistic=float(stat[j, k]))

@@ -5,7 +5,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 import numpy as np
-from scipy.signal import resample_poly
+from scipy.fft import ifft, next_fast_len, rfft
 
 from ...transmit.janus import JanusParameterSet
 
@@ -21,7 +21,10 @@ def baseband_rate(pset: JanusParameterSet) -> float:
 
 
 def to_baseband(x_pb: np.ndarray, fs: float, pset: JanusParameterSet) -> tuple[np.ndarray, float]:
-    """Mix ``x_pb`` down by fc and resample it to :func:`baseband_rate` (zero-phase polyphase filter).
+    """Shift the band about fc to 0 Hz and resample to :func:`baseband_rate`, in the frequency domain.
+
+    One real FFT of the recording, the bins within ±fs_bb/2 of fc kept (tapered by a raised cosine
+    from 0.85 to 1 of fs_bb/2, beyond the tones' ±2.1 kHz), one inverse FFT at the baseband rate.
 
     Parameters
     ----------
@@ -42,10 +45,27 @@ def to_baseband(x_pb: np.ndarray, fs: float, pset: JanusParameterSet) -> tuple[n
     pset.check_rate(fs)
     fs_bb = baseband_rate(pset)
     ratio = Fraction(fs_bb / fs).limit_denominator(4000)
-    n = np.arange(len(x_pb))
-    phase = 2 * np.pi * ((pset.fc_hz * n) % fs) / fs
-    x = np.asarray(x_pb, dtype=np.float64)
-    re = resample_poly(x * np.cos(phase), ratio.numerator, ratio.denominator)
-    im = resample_poly(x * np.sin(phase), ratio.numerator, ratio.denominator)
-    # resample_poly's rate is exactly fs·p/q; fs_bb is that when the fraction is exact
-    return re - 1j * im, float(fs * ratio.numerator / ratio.denominator)
+    p, q = ratio.numerator, ratio.denominator
+    n_in = len(x_pb)
+    # an FFT length that the output rate divides exactly and that pocketfft factors well
+    n_fft = q * next_fast_len(-(-n_in // q))
+    n_out = n_fft // q * p
+    spec = rfft(np.asarray(x_pb, dtype=np.float64), n_fft)
+    df = fs / n_fft
+    k = np.arange(-(n_out // 2), n_out - n_out // 2)
+    f = k * df
+    src = np.round(pset.fc_hz / df).astype(np.int64) + k
+    ok = (src >= 0) & (src < spec.size)
+    edge = 0.85 * fs_bb / 2
+    taper = np.where(np.abs(f) <= edge, 1.0, 0.5 * (1 + np.cos(np.pi * (np.abs(f) - edge) / (fs_bb / 2 - edge))))
+    out = np.zeros(n_out, dtype=complex)
+    out[k[ok] % n_out] = spec[src[ok]] * taper[ok]
+    # the real spectrum's positive half holds the band: ×2 makes the analytic signal; the shift by
+    # round(fc/df) bins is exact when fc is a multiple of df, else a residual fc − round(fc/df)·df
+    # is mixed out in time
+    x_bb = ifft(out) * (2 * n_out / n_fft)
+    residual = pset.fc_hz - np.round(pset.fc_hz / df) * df
+    m = np.arange(n_out)
+    if residual:
+        x_bb *= np.exp(-2j * np.pi * residual * m / fs_bb)
+    return x_bb[: int(np.ceil(n_in * p / q))], float(fs * p / q)
