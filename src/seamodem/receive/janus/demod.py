@@ -81,7 +81,7 @@ def chip_llrs(energies: np.ndarray, slots: np.ndarray) -> tuple[np.ndarray, floa
     # median of an exponential variable is ln 2 × its mean
     local = np.nanmedian(others, axis=1) / np.log(2)
     n0 = float(np.nanmedian(local))
-    noise = np.maximum(local, n0)
+    noise = np.maximum(np.maximum(local, n0), 1e-300)
     es = max(float(np.mean(np.maximum(e0, e1) - noise)), 1e-3 * n0)
     a0 = 2 * np.sqrt(es * e0) / noise
     a1 = 2 * np.sqrt(es * e1) / noise
@@ -99,13 +99,17 @@ class BlockDecision:
         The decoded bytes.
     agreement : float
         Σ L·(1 − 2c) / Σ|L| over the block's chips, c the re-encoded decision: 1 when every chip
-        agrees with the decoded codeword; about 0.35 on noise.
+        agrees with the decoded codeword (about 0.85 on noise: the best of 2⁶⁴ codewords).
+    margin : float
+        Mean over the block's chips of (energy of the decoded codeword's tone − energy of the other
+        tone of the pair) / N0: Es/N0 along the decoded path (a signal's), near 0 on noise.
     es_n0 : float
         Mean chip energy over noise per tone, linear.
     """
 
     data: bytes
     agreement: float
+    margin: float
     es_n0: float
 
 
@@ -128,4 +132,8 @@ def decode_block(
     bits = viterbi_decode(llr, n_bits, outputs=_OUTPUTS)
     coded = conv_encode_janus(bits)
     agreement = float(np.sum(llr * (1 - 2.0 * coded)) / max(np.sum(np.abs(llr)), 1e-300))
-    return BlockDecision(data=bits_to_bytes(bits), agreement=agreement, es_n0=es / max(n0, 1e-300))
+    sent = coded[interleaver_permutation_janus(n)].astype(np.int64)
+    rows = np.arange(n)
+    e = np.nan_to_num(energies)
+    margin = float(np.mean(e[rows, 2 * slots + sent] - e[rows, 2 * slots + 1 - sent]) / max(n0, 1e-300))
+    return BlockDecision(data=bits_to_bytes(bits), agreement=agreement, margin=margin, es_n0=es / max(n0, 1e-300))

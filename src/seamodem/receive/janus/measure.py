@@ -3,8 +3,8 @@
 Every chip is a known tone with a known phase: the transmitter's phasor runs on from chip to chip.
 The received baseband is modelled as A·e^{jθ}·s((1 + ε)(t − τ))·e^{j2π fc ε (t − τ)} + noise, with
 τ the arrival of the first preamble chip. Each chip's complex correlation c_i with the model moves,
-for small changes δτ and δε, by the phase 2π f_i δτ − 2π (fc·(t_i − τ) + f_i·(t_i − τ − b_i)) δε
-(f_i its tone about fc, t_i its centre, b_i its start). A grid over (δτ, δε) finds the peak of
+for small changes δτ and δε, by the phase −2π f_i δτ + 2π (fc + f_i)(t_i − τ) δε (f_i its tone
+about fc, t_i its centre; a change of τ also turns every chip by 2π fc ε δτ, which the common phase θ takes). A grid over (δτ, δε) finds the peak of
 |Σ c_i e^{jφ_i}|; weighted least squares on the chips' residual phases then gives the estimate and
 its covariance, the phase variance of each chip being N0/(2 A² E_i) with N0 measured from the
 residual after the fit (so that misfit, echoes and impulses widen σ).
@@ -35,8 +35,8 @@ class ChipCorrelations:
     n_samples : numpy.ndarray, shape (n,)
     f_hz : numpy.ndarray, shape (n,)
         Tone of each chip about fc [Hz].
-    t_rel_s, t_in_chip_s : numpy.ndarray, shape (n,)
-        Chip centre relative to τ, and relative to its own start [s].
+    t_rel_s : numpy.ndarray, shape (n,)
+        Chip centre relative to τ [s].
     """
 
     c: np.ndarray
@@ -45,7 +45,6 @@ class ChipCorrelations:
     n_samples: np.ndarray
     f_hz: np.ndarray
     t_rel_s: np.ndarray
-    t_in_chip_s: np.ndarray
 
 
 def chip_correlations(
@@ -105,7 +104,7 @@ def chip_correlations(
     t_mid = tau_s + (b_s + len_s / 2) / (1 + eps)
     return ChipCorrelations(
         c=c, energy=np.sum(np.abs(model) ** 2, axis=1), rx_energy=np.sum(np.abs(r) ** 2, axis=1),
-        n_samples=inside.sum(axis=1), f_hz=f[idx], t_rel_s=t_mid - tau_s, t_in_chip_s=len_s / 2,
+        n_samples=inside.sum(axis=1), f_hz=f[idx], t_rel_s=t_mid - tau_s,
     )
 
 
@@ -142,7 +141,7 @@ class ScaleDelayFit:
 def _regressors(cc: ChipCorrelations, fc_hz: float) -> tuple[np.ndarray, np.ndarray]:
     """Phase change per unit δτ and per unit δε of each chip's correlation."""
     d_tau = 2 * np.pi * cc.f_hz
-    d_eps = -2 * np.pi * (fc_hz * cc.t_rel_s + cc.f_hz * cc.t_in_chip_s)
+    d_eps = -2 * np.pi * (fc_hz + cc.f_hz) * cc.t_rel_s
     return d_tau, d_eps
 
 

@@ -27,10 +27,10 @@ class JanusRecord(MeasurementRecord):
         Class 16 / application type 0 fields (−1 otherwise).
     cargo_hex, cargo_text : str
         Decoded cargo (no CRC protects it), and as text when printable.
-    agreement : float
-        Decoder metric of the base packet (:class:`~seamodem.receive.janus.demod.BlockDecision`).
-    cargo_agreement : float
-        The same for the cargo (NaN without cargo).
+    agreement, margin : float
+        Decoder metrics of the base packet (:class:`~seamodem.receive.janus.demod.BlockDecision`).
+    cargo_margin : float
+        The margin of the cargo (NaN without cargo).
     t_arrival_preamble_s, sigma_t_preamble_s : float
         Arrival of the first preamble chip from the preamble alone, and its σ [s].
     scale_eps : float
@@ -52,7 +52,8 @@ class JanusRecord(MeasurementRecord):
     cargo_hex: str = ""
     cargo_text: str = ""
     agreement: float = math.nan
-    cargo_agreement: float = math.nan
+    margin: float = math.nan
+    cargo_margin: float = math.nan
     t_arrival_preamble_s: float = math.nan
     sigma_t_preamble_s: float = math.nan
     scale_eps: float = math.nan
