@@ -17,7 +17,8 @@ from scipy.fft import fft
 
 from ...transmit.janus import PREAMBLE_BITS, JanusParameterSet, hop_slots
 
-__all__ = ["JanusCandidate", "tone_shares", "preamble_statistic", "find_preambles", "DETECTION_THRESHOLD"]
+__all__ = ["JanusCandidate", "tone_shares", "preamble_statistic", "find_preambles", "refine_candidate",
+           "DETECTION_THRESHOLD"]
 
 #: preamble statistic to declare a candidate: noise gives 1 ± 0.18 (8 σ above)
 DETECTION_THRESHOLD = 2.5
@@ -47,18 +48,34 @@ class JanusCandidate:
 def tone_shares(x_bb: np.ndarray, fs_bb: float, pset: JanusParameterSet, n_chip: int, step: int = 1) -> np.ndarray:
     """Share of each tone in the energy of the chip-long windows starting at samples 0, step, 2·step, …
 
+    ``step`` must divide ``n_chip``. Each block of ``step`` samples is projected on the 26 tones once
+    (one small matrix product); a window's tone sums are then running sums of n_chip/step blocks.
+
     Returns
     -------
     numpy.ndarray, shape (26, n_windows), float32
     """
-    if len(x_bb) < n_chip:
-        return np.zeros((2 * pset.n_slots, 0), dtype=np.float32)
-    windows = sliding_window_view(x_bb, n_chip)[::step]
-    # tone k sits on bin (k − Q)·n_chip·cf/fs_bb of an n_chip-point DFT
-    bins = np.round(np.asarray(pset.tone_offsets_hz()) * n_chip / fs_bb).astype(np.int64) % n_chip
-    e = np.abs(fft(windows, axis=1)[:, bins].T) ** 2
-    total = e.sum(axis=0)
-    return (e / np.maximum(total, 1e-300)).astype(np.float32)
+    n_tones = 2 * pset.n_slots
+    per_window = n_chip // step
+    n_blocks = len(x_bb) // step
+    if n_blocks < per_window or n_chip % step:
+        if n_chip % step:
+            raise ValueError(f"step must divide the chip's {n_chip} samples, got {step}")
+        return np.zeros((n_tones, 0), dtype=np.float32)
+    # tone k sits on bin b_k of an n_chip-point DFT; its oscillator at sample step·j + m
+    bins = np.round(np.asarray(pset.tone_offsets_hz()) * n_chip / fs_bb).astype(np.int64)
+    m = np.arange(step)
+    inner = np.exp(-2j * np.pi * np.outer(bins, m) / n_chip).astype(np.complex64)
+    # (26, n_blocks), C order: the running sums run along contiguous rows
+    blocks = inner @ x_bb[: n_blocks * step].reshape(n_blocks, step).T.astype(np.complex64)
+    j = np.arange(per_window)
+    outer = np.exp(-2j * np.pi * np.outer(bins, j) * step / n_chip).astype(np.complex64)
+    blocks *= np.tile(outer, (1, -(-n_blocks // per_window)))[:, :n_blocks]
+    c = np.cumsum(blocks, axis=1, dtype=np.complex128)
+    sums = c[:, per_window - 1 :].copy()
+    sums[:, 1:] -= c[:, : n_blocks - per_window]
+    e = sums.real**2 + sums.imag**2
+    return (e / np.maximum(e.sum(axis=0), 1e-300)).astype(np.float32)
 
 
 def preamble_statistic(shares: np.ndarray, pset: JanusParameterSet, n_chip: int, eps: np.ndarray, step: int = 1):
@@ -89,8 +106,9 @@ def find_preambles(
     v_max_mps: float = 5.0,
     sound_speed_mps: float = 1500.0,
     threshold: float = DETECTION_THRESHOLD,
+    refine: bool = True,
 ) -> list[JanusCandidate]:
-    """Candidate preambles, strongest first within each packet-length neighbourhood, in time order.
+    """Candidate preambles, the strongest within each preamble-length neighbourhood, in time order.
 
     Parameters
     ----------
@@ -106,6 +124,9 @@ def find_preambles(
         c [m/s].
     threshold : float
         Statistic above which a start is a candidate.
+    refine : bool
+        Refine each to the sample (:func:`refine_candidate`); else starts are 4 samples apart and
+        scales on the coarse bank.
 
     Returns
     -------
@@ -115,10 +136,7 @@ def find_preambles(
     if len(x_bb) < 33 * n_chip:
         return []
     shares = tone_shares(x_bb, fs_bb, pset, n_chip, _COARSE_STEP)
-    eps_max = v_max_mps / sound_speed_mps
-    # the preamble's last chip moves 31·n_chip·ε samples: one hypothesis per 2 samples of it
-    n_eps = 2 * int(np.ceil(31 * n_chip * eps_max / 2)) + 1
-    eps = np.linspace(-eps_max, eps_max, n_eps)
+    eps = _scale_bank(n_chip, v_max_mps / sound_speed_mps)
     stat, starts = preamble_statistic(shares, pset, n_chip, eps, step=_COARSE_STEP)
     if not starts.size:
         return []
@@ -130,16 +148,35 @@ def find_preambles(
         k = above[np.argmax(best[above])]
         found.append(k)
         above = above[np.abs(above - k) > guard]
-    out = []
-    for k in sorted(found):
-        deps = eps[1] - eps[0] if n_eps > 1 else 0.0
-        out.append(_refine(x_bb, fs_bb, pset, n_chip, int(starts[k]), float(eps[np.argmax(stat[:, k])]), deps))
+    out = [JanusCandidate(start=float(starts[k]), scale_eps=float(eps[np.argmax(stat[:, k])]), statistic=float(best[k]))
+           for k in sorted(found)]
+    if refine:
+        out = [refine_candidate(x_bb, fs_bb, pset, c, v_max_mps=v_max_mps, sound_speed_mps=sound_speed_mps)
+               for c in out]
     return out
 
 
-def _refine(x_bb, fs_bb, pset, n_chip, start, eps0, deps) -> JanusCandidate:
-    """Best start (to the sample) and scale (to a sixth of the bank's step) near a coarse candidate."""
-    eps = eps0 + deps * np.linspace(-1, 1, 13)
+def _scale_bank(n_chip: int, eps_max: float) -> np.ndarray:
+    """Time scales of the coarse bank: the preamble's last chip moves 31·n_chip·ε samples, one hypothesis per 2."""
+    n_eps = 2 * int(np.ceil(31 * n_chip * eps_max / 2)) + 1
+    return np.linspace(-eps_max, eps_max, n_eps)
+
+
+def refine_candidate(
+    x_bb: np.ndarray, fs_bb: float, pset: JanusParameterSet, cand: JanusCandidate, *, v_max_mps: float = 5.0,
+    sound_speed_mps: float = 1500.0,
+) -> JanusCandidate:
+    """Best start (to the sample) and scale (to a sixth of the bank's step) near a coarse candidate.
+
+    Returns
+    -------
+    JanusCandidate
+    """
+    n_chip = int(round(pset.chip_s * fs_bb))
+    bank = _scale_bank(n_chip, v_max_mps / sound_speed_mps)
+    deps = bank[1] - bank[0] if bank.size > 1 else 0.0
+    eps = cand.scale_eps + deps * np.linspace(-1, 1, 13)
+    start = int(cand.start)
     lo = max(start - _COARSE_STEP, 0)
     hi = lo + 2 * _COARSE_STEP + int(np.ceil(32 * n_chip / (1 + eps.min()))) + 2
     shares = tone_shares(x_bb[lo:hi], fs_bb, pset, n_chip)

@@ -25,7 +25,7 @@ from ...transmit.janus import (
 )
 from ..settings import Emissions
 from .demod import decode_block
-from .detect import DETECTION_THRESHOLD, find_preambles
+from .detect import DETECTION_THRESHOLD, find_preambles, refine_candidate
 from .frontend import to_baseband
 from .measure import fit_delay_scale
 from .records import JanusRecord
@@ -140,15 +140,17 @@ def receive_janus(x_pb: np.ndarray, fs: float, settings: JanusSettings | None = 
     pset = settings.pset
     x_bb, fs_bb = to_baseband(x_pb, fs, pset)
     candidates = find_preambles(x_bb, fs_bb, pset, v_max_mps=settings.v_max_mps,
-                                sound_speed_mps=settings.sound_speed_mps, threshold=settings.threshold)
+                                sound_speed_mps=settings.sound_speed_mps, threshold=settings.threshold, refine=False)
     preamble_tones = 2 * hop_slots(32, pset) + PREAMBLE_BITS
     records: list[JanusRecord] = []
     busy_until = -np.inf
     eps_max = 1.05 * settings.v_max_mps / settings.sound_speed_mps + 1e-4
     for cand in candidates:
-        tau0 = cand.start / fs_bb
-        if tau0 < busy_until:
+        if cand.start / fs_bb < busy_until:
             continue
+        cand = refine_candidate(x_bb, fs_bb, pset, cand, v_max_mps=settings.v_max_mps,
+                                sound_speed_mps=settings.sound_speed_mps)
+        tau0 = cand.start / fs_bb
         # the tone-share statistic barely sees ε over 32 chips: the coherent fit searches all of ±v_max/c
         pre = fit_delay_scale(x_bb, fs_bb, preamble_tones, pset, fs, tau0, 0.0,
                               tau_span_s=1.5 / fs_bb, eps_span=eps_max)
