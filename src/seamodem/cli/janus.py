@@ -140,9 +140,10 @@ def run_rx(args: argparse.Namespace) -> int:
         raise InputFileError(f"recording not found: {recording}")
     import json
 
+    from ..io.blocks import channel_blocks
     from ..io.sidecar import sidecar_path
-    from ..io.wav import read_wav
-    from ..receive.janus import JANUS_FIELDS, JanusSettings, receive_janus
+    from ..io.source import open_recording
+    from ..receive.janus import JANUS_FIELDS, JanusReceiver, JanusSettings
     from ..receive.records import write_measurements
     from ..receive.settings import Emissions
     from ..transmit.janus.beacon import JANUS_SIDECAR_FORMAT
@@ -159,11 +160,15 @@ def run_rx(args: argparse.Namespace) -> int:
     if emissions is None and side is not None:
         emissions = Emissions(times_s=[f["t_emit_s"] for f in side["frames"]])
     c, origin = sound_speed(args, side)
-    x, fs = read_wav(recording, channel=args.channel)
+    source = open_recording(recording)
+    channel = source.one_channel(args.channel)
+    fs = source.sample_rate_hz
     settings = JanusSettings(pset=_pset(args), sound_speed_mps=c, v_max_mps=args.v_max, emissions=emissions)
-    records = receive_janus(x, fs, settings)
+    # streamed: records reach the file as packets are found, and a long recording is held 20 s at a time
+    records = JanusReceiver(fs, settings).run(channel_blocks(source, channel))
     header = {
-        "created_by": command_line(), "recording": str(recording), "sample_rate_hz": fs, "sound_speed_mps": c,
+        "created_by": command_line(), "recording": str(recording), "sample_rate_hz": fs, "channel": channel,
+        "sound_speed_mps": c,
         "v_max_mps": settings.v_max_mps, "pset": settings.pset.to_dict(),
         "t_arrival": "first preamble chip", "v_r_source": "whole packet (data-aided, after decoding)",
         "snr_definition": "in-band SNR over the available bandwidth B, from the whole-packet fit",

@@ -12,12 +12,13 @@ from .detect import (
 )
 from .frontend import baseband_rate, to_baseband
 from .measure import ChipCorrelations, ScaleDelayFit, chip_correlations, fit_delay_scale
-from .receiver import MIN_MARGIN, MIN_CARGO_MARGIN, JanusSettings, receive_janus
+from .receiver import MIN_CARGO_MARGIN, MIN_MARGIN, JanusSettings, receive_janus, receive_segment
 from .records import JANUS_FIELDS, JanusRecord
+from .stream import JanusReceiver
 
 __all__ = [
     "BlockDecision", "chip_energies", "chip_llrs", "decode_block", "DETECTION_THRESHOLD", "JanusCandidate",
     "find_preambles", "preamble_statistic", "refine_candidate", "tone_shares", "baseband_rate", "to_baseband", "ChipCorrelations",
     "ScaleDelayFit", "chip_correlations", "fit_delay_scale", "MIN_MARGIN", "MIN_CARGO_MARGIN", "JanusSettings",
-    "receive_janus", "JANUS_FIELDS", "JanusRecord",
+    "receive_janus", "receive_segment", "JanusReceiver", "JANUS_FIELDS", "JanusRecord",
 ]

@@ -10,7 +10,7 @@ range and v_r.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -30,7 +30,7 @@ from .frontend import to_baseband
 from .measure import fit_delay_scale
 from .records import JanusRecord
 
-__all__ = ["JanusSettings", "receive_janus", "MIN_MARGIN", "MIN_CARGO_MARGIN"]
+__all__ = ["JanusSettings", "receive_janus", "receive_segment", "MIN_MARGIN", "MIN_CARGO_MARGIN"]
 
 #: the base packet's decoded-path margin (Es/N0 along the decoded codeword) a packet needs besides its CRC:
 #: noise gives 0.83 (median), 1.12 at most in 3000 decodings; a packet at -18 dB over 0..fs/2 gives 2-2.6
@@ -119,8 +119,87 @@ def _decode_base(x_bb, fs_bb, pset, pre, cand, min_margin):
     return None
 
 
+def receive_segment(
+    x_pb: np.ndarray, fs: float, settings: JanusSettings, *, t0_s: float = 0.0, after_s: float = -np.inf,
+    final: bool = True,
+) -> tuple[list[JanusRecord], float]:
+    """Packets whose preamble starts in a stretch of a recording (the streaming receiver's step).
+
+    Parameters
+    ----------
+    x_pb : numpy.ndarray, shape (n_samples,)
+        Real passband samples; the first is at ``t0_s`` on the recording's clock.
+    fs : float
+        Sample rate [Hz].
+    settings : JanusSettings
+        Receiver settings.
+    t0_s : float
+        Time of ``x_pb[0]`` [s].
+    after_s : float
+        Preambles starting before this time were dealt with by an earlier stretch [s].
+    final : bool
+        Nothing follows: packets cut by the end are given up. Otherwise a preamble too close to the
+        end for its base packet, or a packet whose cargo runs past the end, is left for the next stretch.
+
+    Returns
+    -------
+    records : list of JanusRecord
+        Times on the recording's clock.
+    done_s : float
+        Every preamble starting before this time has been dealt with (the next stretch's ``after_s``).
+    """
+    pset = settings.pset
+    x_bb, fs_bb = to_baseband(x_pb, fs, pset)
+    end_s = t0_s + len(x_pb) / fs
+    # a candidate needs its preamble and base packet inside the stretch, unless nothing follows
+    stop_s = end_s if final else end_s - (33 + _N_BASE_CHIPS) * pset.chip_s * 1.01
+    candidates = find_preambles(x_bb, fs_bb, pset, v_max_mps=settings.v_max_mps,
+                                sound_speed_mps=settings.sound_speed_mps, threshold=settings.threshold, refine=False)
+    preamble_tones = 2 * hop_slots(32, pset) + PREAMBLE_BITS
+    records: list[JanusRecord] = []
+    busy_until = after_s - t0_s
+    eps_max = 1.05 * settings.v_max_mps / settings.sound_speed_mps + 1e-4
+    for cand in candidates:
+        if cand.start / fs_bb < busy_until:
+            continue
+        if t0_s + cand.start / fs_bb >= stop_s:
+            break
+        cand = refine_candidate(x_bb, fs_bb, pset, cand, v_max_mps=settings.v_max_mps,
+                                sound_speed_mps=settings.sound_speed_mps)
+        tau0 = cand.start / fs_bb
+        # the tone-share statistic barely sees ε over 32 chips: the coherent fit searches all of ±v_max/c
+        pre = fit_delay_scale(x_bb, fs_bb, preamble_tones, pset, fs, tau0, 0.0,
+                              tau_span_s=1.5 / fs_bb, eps_span=eps_max)
+        base = _decode_base(x_bb, fs_bb, pset, pre, cand, settings.min_margin)
+        if base is None:
+            continue
+        packet = JanusPacket.from_bytes(base.data)
+        n_cargo = packet.announced_cargo_bytes
+        n_chips = 32 + _N_BASE_CHIPS + (16 * (n_cargo + 1) if n_cargo else 0)
+        if not final and t0_s + pre.tau_s + n_chips * pset.chip_s * 1.01 > end_s:
+            return records, t0_s + cand.start / fs_bb - pset.chip_s
+        tones = 2 * hop_slots(32 + _N_BASE_CHIPS, pset) + np.concatenate([PREAMBLE_BITS, packet_chip_bits(packet)])
+        # the preamble's (τ, ε) ambiguity has sidelobes ~1/(fc·0.13 s) apart in ε: the whole packet searches past them
+        fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, pre.tau_s, pre.eps,
+                              tau_span_s=1.5 / fs_bb, eps_span=_WHOLE_PACKET_EPS_SPAN)
+        cargo_dec = None
+        if n_cargo:
+            cargo_dec = decode_block(x_bb, fs_bb, pset, fit.tau_s * fs_bb, fit.eps, 32 + _N_BASE_CHIPS, n_cargo)
+            packet = JanusPacket.from_bytes(base.data, cargo_dec.data)
+            if cargo_dec.margin >= MIN_CARGO_MARGIN:
+                all_bits = np.concatenate([PREAMBLE_BITS, packet_chip_bits(packet)])
+                tones = 2 * hop_slots(all_bits.size, pset) + all_bits
+                fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, fit.tau_s, fit.eps,
+                                      tau_span_s=max(4 * fit.sigma_tau_s, 2e-6), eps_span=max(5 * fit.sigma_eps, 1e-7))
+        busy_until = fit.tau_s + n_chips * pset.chip_s / (1 + fit.eps) - pset.chip_s
+        fit = replace(fit, tau_s=fit.tau_s + t0_s)
+        pre = replace(pre, tau_s=pre.tau_s + t0_s)
+        records.append(_record(packet, fit, pre, base, cargo_dec, settings, cand.statistic))
+    return records, max(stop_s, t0_s + busy_until)
+
+
 def receive_janus(x_pb: np.ndarray, fs: float, settings: JanusSettings | None = None) -> list[JanusRecord]:
-    """Detect, decode and measure every JANUS packet of a recording.
+    """Detect, decode and measure every JANUS packet of a recording held in memory.
 
     Parameters
     ----------
@@ -135,44 +214,9 @@ def receive_janus(x_pb: np.ndarray, fs: float, settings: JanusSettings | None = 
     -------
     list of JanusRecord
         One per packet whose base packet passed the CRC and the margin test, in time order.
+
+    See Also
+    --------
+    seamodem.receive.janus.stream.JanusReceiver : the same, on a stream of blocks.
     """
-    settings = settings or JanusSettings()
-    pset = settings.pset
-    x_bb, fs_bb = to_baseband(x_pb, fs, pset)
-    candidates = find_preambles(x_bb, fs_bb, pset, v_max_mps=settings.v_max_mps,
-                                sound_speed_mps=settings.sound_speed_mps, threshold=settings.threshold, refine=False)
-    preamble_tones = 2 * hop_slots(32, pset) + PREAMBLE_BITS
-    records: list[JanusRecord] = []
-    busy_until = -np.inf
-    eps_max = 1.05 * settings.v_max_mps / settings.sound_speed_mps + 1e-4
-    for cand in candidates:
-        if cand.start / fs_bb < busy_until:
-            continue
-        cand = refine_candidate(x_bb, fs_bb, pset, cand, v_max_mps=settings.v_max_mps,
-                                sound_speed_mps=settings.sound_speed_mps)
-        tau0 = cand.start / fs_bb
-        # the tone-share statistic barely sees ε over 32 chips: the coherent fit searches all of ±v_max/c
-        pre = fit_delay_scale(x_bb, fs_bb, preamble_tones, pset, fs, tau0, 0.0,
-                              tau_span_s=1.5 / fs_bb, eps_span=eps_max)
-        base = _decode_base(x_bb, fs_bb, pset, pre, cand, settings.min_margin)
-        if base is None:
-            continue
-        packet = JanusPacket.from_bytes(base.data)
-        tones = 2 * hop_slots(32 + _N_BASE_CHIPS, pset) + np.concatenate([PREAMBLE_BITS, packet_chip_bits(packet)])
-        # the preamble's (τ, ε) ambiguity has sidelobes ~1/(fc·0.13 s) apart in ε: the whole packet searches past them
-        fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, pre.tau_s, pre.eps,
-                              tau_span_s=1.5 / fs_bb, eps_span=_WHOLE_PACKET_EPS_SPAN)
-        cargo_dec = None
-        n_cargo = packet.announced_cargo_bytes
-        if n_cargo:
-            cargo_dec = decode_block(x_bb, fs_bb, pset, fit.tau_s * fs_bb, fit.eps, 32 + _N_BASE_CHIPS, n_cargo)
-            packet = JanusPacket.from_bytes(base.data, cargo_dec.data)
-            if cargo_dec.margin >= MIN_CARGO_MARGIN:
-                all_bits = np.concatenate([PREAMBLE_BITS, packet_chip_bits(packet)])
-                tones = 2 * hop_slots(all_bits.size, pset) + all_bits
-                fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, fit.tau_s, fit.eps,
-                                      tau_span_s=max(4 * fit.sigma_tau_s, 2e-6), eps_span=max(5 * fit.sigma_eps, 1e-7))
-        n_chips = 32 + _N_BASE_CHIPS + (16 * (n_cargo + 1) if n_cargo else 0)
-        busy_until = fit.tau_s + n_chips * pset.chip_s / (1 + fit.eps) - pset.chip_s
-        records.append(_record(packet, fit, pre, base, cargo_dec, settings, cand.statistic))
-    return records
+    return receive_segment(x_pb, fs, settings or JanusSettings())[0]
