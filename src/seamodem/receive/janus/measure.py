@@ -157,6 +157,80 @@ def _grid_peak(cc: ChipCorrelations, fc_hz: float, tau_span: float, eps_span: fl
     return taus[i], epss[j]
 
 
+def _excess_scatter(res: np.ndarray, w: np.ndarray) -> float:
+    """Residual phases' scatter over what N0 predicts, per chip and per stretch of ~8 consecutive chips.
+
+    A merged echo with its own Doppler, or fading, turns the phase slowly: per chip it hides in the
+    noise, averaged over a stretch it shows.
+    """
+    chi2 = float(np.sum(w * res**2) / max(len(res) - 3, 1))
+    n_seg = min(16, len(res) // 8)
+    if n_seg > 3:
+        groups = np.array_split(np.arange(len(res)), n_seg)
+        ws = np.array([np.sum(w[g]) for g in groups])
+        rs = np.array([np.sum(w[g] * res[g]) for g in groups]) / ws
+        chi2 = max(chi2, float(np.sum(ws * rs**2) / (n_seg - 2)))
+    return chi2
+
+
+def _ripple_delay_s(cc: ChipCorrelations, model_phase: np.ndarray, amplitude: float, n0: float) -> float:
+    """Arrival-time uncertainty from the channel's ripple across the tones [s].
+
+    An echo too close to separate (e.g. a surface reflection a fraction of a millisecond late) makes
+    the channel's gain vary across the band: its phase part is indistinguishable from a delay and
+    biases the arrival, its magnitude part shows. The rms ripple of the per-tone gain magnitude
+    beyond the noise, r, bounds the phase ripple; its delay equivalent is r / (2π f_rms), f_rms the
+    tones' rms spread.
+    """
+    z = cc.c * np.exp(-1j * model_phase)
+    tones = np.unique(cc.f_hz)
+    if tones.size < 4 or amplitude <= 0:
+        return 0.0
+    mags, var = [], []
+    for f in tones:
+        k = cc.f_hz == f
+        e = np.sum(cc.energy[k])
+        mags.append(abs(np.sum(z[k])) / (amplitude * e))
+        var.append(n0 / (2 * amplitude**2 * e))
+    mags, var = np.asarray(mags), np.asarray(var)
+    dev2 = (mags / np.mean(mags) - 1) ** 2
+    # noise alone: Σ dev²/var is χ² with n − 1 degrees of freedom; ripple only when 3 σ beyond
+    dof = tones.size - 1
+    if np.sum(dev2 / var) < dof + 3 * np.sqrt(2 * dof):
+        return 0.0
+    excess = float(np.mean(dev2 - var))
+    f_rms = float(np.sqrt(np.mean((cc.f_hz - np.mean(cc.f_hz)) ** 2)))
+    return float(np.sqrt(max(excess, 0.0))) / (2 * np.pi * f_rms)
+
+
+def _fading_rate(cc: ChipCorrelations, model_phase: np.ndarray, amplitude: float, n0: float) -> float:
+    """Rate of change of the log-amplitude over the packet beyond the noise [1/s].
+
+    Two paths too close to separate, with different Doppler, beat: their sum's phase turns at a
+    rate that looks like Doppler, and its amplitude changes at a rate of the same order (a fading
+    surface does the same). This rate, as a phase rate, is the scale's uncertainty that the
+    phases alone cannot show.
+    """
+    n_seg = min(16, len(cc.c) // 8)
+    if n_seg < 4 or amplitude <= 0:
+        return 0.0
+    groups = np.array_split(np.arange(len(cc.c)), n_seg)
+    z = cc.c * np.exp(-1j * model_phase)
+    e = np.array([np.sum(cc.energy[g]) for g in groups])
+    m = np.array([abs(np.sum(z[g])) for g in groups]) / (amplitude * e)
+    t = np.array([np.mean(cc.t_rel_s[g]) for g in groups])
+    # ln m has variance ≈ N0 / (2 A² E) per stretch
+    w = 2 * amplitude**2 * e / n0
+    y = np.log(np.maximum(m, 1e-3))
+    tc = t - np.sum(w * t) / np.sum(w)
+    sxx = np.sum(w * tc**2)
+    slope = np.sum(w * tc * (y - np.sum(w * y) / np.sum(w))) / sxx
+    # the slope's noise σ is 1/√sxx: a rate only when 3 σ beyond it
+    if slope**2 * sxx < 9:
+        return 0.0
+    return float(np.sqrt(slope**2 - 1 / sxx))
+
+
 def fit_delay_scale(
     x_bb: np.ndarray, fs_bb: float, tones: np.ndarray, pset: JanusParameterSet, fs_tx: float, tau_s: float, eps: float,
     *, tau_span_s: float, eps_span: float,
@@ -191,10 +265,11 @@ def fit_delay_scale(
     info = h.T @ (w[:, None] * h)
     cov = np.linalg.pinv(info)
     delta = cov @ (h.T @ (w * resid_phase))
-    # phase residual scatter beyond its expected N0 widens σ (misfit, echoes)
     res = resid_phase - h @ delta
-    chi2 = float(np.sum(w * res**2) / max(len(res) - 3, 1))
-    cov = cov * max(chi2, 1.0)
+    cov = cov * max(_excess_scatter(res, w), 1.0)
+    model_phase = theta + (resid_phase - res)
+    cov[1, 1] += _ripple_delay_s(cc, model_phase, amplitude, n0) ** 2
+    cov[2, 2] += (_fading_rate(cc, model_phase, amplitude, n0) / (2 * np.pi * fc)) ** 2
     tau_s = tau_s + delta[1]
     eps = eps + delta[2]
     rho = abs(np.sum(cc.c)) / np.sqrt(np.sum(cc.energy) * np.sum(cc.rx_energy))
