@@ -54,6 +54,8 @@ def test_config_list_shows_janus_parameter_sets(capsys):
     (["tx", "--janus", "--sample-rate", 20000, "-o", "x.wav"], "fs must exceed"),
     (["tx", "--janus", "--packet-cargo", "x" * 481, "-o", "x.wav"], "cargo must be"),
     (["rx", "--janus", "missing.wav", "-o", "x.csv"], "recording not found"),
+    (["rx", "--janus", "x.wav", "--reference", "lfm:19000-29000:0.05", "-o", "x.csv"], "not both"),
+    (["tx", "--janus", "--reference", "lfm:19000-29000:0.05", "-o", "x.wav"], "not both"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys, args, message):
     monkeypatch.chdir(tmp_path)

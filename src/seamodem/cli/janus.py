@@ -29,8 +29,8 @@ def add_tx_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "JANUS packets (docs/janus.md)",
         "With --janus, each emission is a JANUS packet (STANAG 4748), made as the reference janus-tx makes it: "
-        "--format pcm16 writes its samples exactly. Packet k's first sample is at START + k·PERIOD; the sidecar's "
-        "t_emit_s is its first preamble chip.",
+        "--format pcm16 writes its samples exactly. --count defaults to 1 (the file is then the packet alone); "
+        "packet k's first sample is at START + k·PERIOD, and the sidecar's t_emit_s is its first preamble chip.",
     )
     g.add_argument("--janus", action="store_true", help="emit JANUS packets instead of seamodem frames")
     _pset_options(g)
@@ -93,6 +93,8 @@ def run_tx(args: argparse.Namespace) -> int:
 
     if args.payload_text or args.payload_file:
         raise SeamodemError("payload-text: JANUS carries --packet-cargo (drop --payload-text/--payload-file)")
+    if args.reference:
+        raise SeamodemError("janus: give --janus or --reference, not both")
     out = output_path(args.output, ".wav")
     fs = args.sample_rate
     if fs != int(fs):
@@ -132,6 +134,8 @@ def run_rx(args: argparse.Namespace) -> int:
     """Decode and measure every JANUS packet of one recording."""
     if len(args.recording) != 1:
         raise SeamodemError("janus: give one recording with --janus")
+    if args.reference:
+        raise SeamodemError("janus: give --janus or --reference, not both")
     out = check_writable(args.output)
     if out.suffix.lower() not in (".csv", ".jsonl"):
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
