@@ -145,14 +145,20 @@ def _regressors(cc: ChipCorrelations, fc_hz: float) -> tuple[np.ndarray, np.ndar
     return d_tau, d_eps
 
 
-def _grid_peak(cc: ChipCorrelations, fc_hz: float, tau_span: float, eps_span: float, n_tau: int, n_eps: int):
+def _grid_peak(cc: ChipCorrelations, fc_hz: float, tau_span: float, eps_span: float, n_tau: int, n_eps: int,
+               segments: list[np.ndarray] | None = None):
+    """Peak of |Σ c_i e^{j(d_tau δτ + d_eps δε)}|² on a grid; with ``segments``, of Σ_s |Σ_{i ∈ s} …|²
+    (coherent within each stretch of chips only: free of the whole packet's sidelobes in ε)."""
     d_tau, d_eps = _regressors(cc, fc_hz)
     taus = np.linspace(-tau_span, tau_span, n_tau)
     epss = np.linspace(-eps_span, eps_span, n_eps)
-    # |Σ c_i e^{j(d_tau δτ + d_eps δε)}| on the grid: one complex matrix product per axis
-    a = np.exp(1j * np.outer(taus, d_tau))
+    # one complex matrix product per axis
+    a = np.exp(1j * np.outer(taus, d_tau)) * cc.c[None, :]
     b = np.exp(1j * np.outer(d_eps, epss))
-    p = np.abs((a * cc.c[None, :]) @ b)
+    if segments is None:
+        p = np.abs(a @ b)
+    else:
+        p = sum(np.abs(a[:, g] @ b[g, :]) ** 2 for g in segments)
     i, j = np.unravel_index(np.argmax(p), p.shape)
     return taus[i], epss[j]
 
@@ -233,9 +239,15 @@ def _fading_rate(cc: ChipCorrelations, model_phase: np.ndarray, amplitude: float
 
 def fit_delay_scale(
     x_bb: np.ndarray, fs_bb: float, tones: np.ndarray, pset: JanusParameterSet, fs_tx: float, tau_s: float, eps: float,
-    *, tau_span_s: float, eps_span: float,
+    *, tau_span_s: float, eps_span: float, segment_chips: int | None = None,
 ) -> ScaleDelayFit:
     """Fit τ and ε of a packet whose chips ``tones`` are known, starting from (τ, ε) ± the spans.
+
+    Parameters
+    ----------
+    segment_chips : int, optional
+        First search the spans with the chips summed coherently only within stretches of this many
+        (a wide search in ε without the whole packet's sidelobes), then coherently about its peak.
 
     Returns
     -------
@@ -243,35 +255,46 @@ def fit_delay_scale(
     """
     fc = pset.fc_hz
     duration = len(tones) * pset.chip_s
-    for _ in range(3):
+    if segment_chips:
         cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
-        # steps: a tenth of a cycle of the highest tone in delay, of the carrier over the packet in scale
+        n_seg = max(len(tones) // segment_chips, 1)
+        segments = np.array_split(np.arange(len(tones)), n_seg)
         n_tau = int(min(max(2 * tau_span_s * pset.used_band_hz * 10, 3), 401)) | 1
-        n_eps = int(min(max(2 * eps_span * fc * duration * 10, 3), 401)) | 1
-        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps)
+        n_eps = int(min(max(2 * eps_span * fc * duration / n_seg * 10, 3), 401)) | 1
+        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps, segments)
         tau_s, eps = tau_s + d_tau, eps + d_eps
         tau_span_s = 2 * tau_span_s / max(n_tau - 1, 1)
         eps_span = 2 * eps_span / max(n_eps - 1, 1)
-    cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
-    d_tau, d_eps = _regressors(cc, fc)
-    amp_c = np.sum(cc.c) / np.sum(cc.energy)
-    theta = np.angle(amp_c)
-    amplitude = abs(amp_c)
-    resid_phase = np.angle(cc.c * np.exp(-1j * theta))
-    # residual energy: Σ|r|² − |A|²·Σ E over the chips' samples (the fitted model removed)
-    n0 = max((np.sum(cc.rx_energy) - amplitude**2 * np.sum(cc.energy)) / max(np.sum(cc.n_samples), 1), 1e-300)
-    w = 2 * amplitude**2 * cc.energy / n0
-    h = np.column_stack([np.ones_like(d_tau), -d_tau, -d_eps])
-    info = h.T @ (w[:, None] * h)
-    cov = np.linalg.pinv(info)
-    delta = cov @ (h.T @ (w * resid_phase))
+    for _ in range(2):
+        cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
+        # steps: a tenth of a cycle of the highest tone in delay, of the carrier over the packet in scale;
+        # the next grid spans ± one step about the peak
+        n_tau = int(min(max(2 * tau_span_s * pset.used_band_hz * 10, 5), 401)) | 1
+        n_eps = int(min(max(2 * eps_span * fc * duration * 10, 5), 401)) | 1
+        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps)
+        tau_s, eps = tau_s + d_tau, eps + d_eps
+        tau_span_s = 2 * tau_span_s / (n_tau - 1)
+        eps_span = 2 * eps_span / (n_eps - 1)
+    # Gauss-Newton on the chips' phases from the grid's peak: two steps (σ from the second's linearisation)
+    for _ in range(2):
+        cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
+        d_tau, d_eps = _regressors(cc, fc)
+        amp_c = np.sum(cc.c) / np.sum(cc.energy)
+        theta = np.angle(amp_c)
+        amplitude = abs(amp_c)
+        resid_phase = np.angle(cc.c * np.exp(-1j * theta))
+        # residual energy: Σ|r|² − |A|²·Σ E over the chips' samples (the fitted model removed)
+        n0 = max((np.sum(cc.rx_energy) - amplitude**2 * np.sum(cc.energy)) / max(np.sum(cc.n_samples), 1), 1e-300)
+        w = 2 * amplitude**2 * cc.energy / n0
+        h = np.column_stack([np.ones_like(d_tau), -d_tau, -d_eps])
+        cov = np.linalg.pinv(h.T @ (w[:, None] * h))
+        delta = cov @ (h.T @ (w * resid_phase))
+        tau_s, eps = tau_s + delta[1], eps + delta[2]
     res = resid_phase - h @ delta
     cov = cov * max(_excess_scatter(res, w), 1.0)
     model_phase = theta + (resid_phase - res)
     cov[1, 1] += _ripple_delay_s(cc, model_phase, amplitude, n0) ** 2
     cov[2, 2] += (_fading_rate(cc, model_phase, amplitude, n0) / (2 * np.pi * fc)) ** 2
-    tau_s = tau_s + delta[1]
-    eps = eps + delta[2]
     rho = abs(np.sum(cc.c)) / np.sqrt(np.sum(cc.energy) * np.sum(cc.rx_energy))
     return ScaleDelayFit(
         tau_s=float(tau_s), eps=float(eps), sigma_tau_s=float(np.sqrt(cov[1, 1])), sigma_eps=float(np.sqrt(cov[2, 2])),

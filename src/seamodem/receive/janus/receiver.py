@@ -38,8 +38,9 @@ MIN_MARGIN = 1.5
 #: the cargo's margin for its chips to join the whole-packet fit (no CRC protects the cargo)
 MIN_CARGO_MARGIN = 1.5
 _N_BASE_CHIPS = 144
-#: the whole-packet fit's first search in ε (±1.8 m/s about the preamble's estimate)
-_WHOLE_PACKET_EPS_SPAN = 1.2e-3
+#: arrival searched ± this many baseband samples about the detector's start: its tone-share peak is
+#: flat over a few samples at low SNR (a tenth of a chip)
+_TAU_SPAN_SAMPLES = 4.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -169,7 +170,7 @@ def receive_segment(
         tau0 = cand.start / fs_bb
         # the tone-share statistic barely sees ε over 32 chips: the coherent fit searches all of ±v_max/c
         pre = fit_delay_scale(x_bb, fs_bb, preamble_tones, pset, fs, tau0, 0.0,
-                              tau_span_s=1.5 / fs_bb, eps_span=eps_max)
+                              tau_span_s=_TAU_SPAN_SAMPLES / fs_bb, eps_span=eps_max)
         base = _decode_base(x_bb, fs_bb, pset, pre, cand, settings.min_margin)
         if base is None:
             continue
@@ -179,9 +180,10 @@ def receive_segment(
         if not final and t0_s + pre.tau_s + n_chips * pset.chip_s * 1.01 > end_s:
             return records, t0_s + cand.start / fs_bb - pset.chip_s
         tones = 2 * hop_slots(32 + _N_BASE_CHIPS, pset) + np.concatenate([PREAMBLE_BITS, packet_chip_bits(packet)])
-        # the preamble's (τ, ε) ambiguity has sidelobes ~1/(fc·0.13 s) apart in ε: the whole packet searches past them
-        fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, pre.tau_s, pre.eps,
-                              tau_span_s=1.5 / fs_bb, eps_span=_WHOLE_PACKET_EPS_SPAN)
+        # the preamble's (τ, ε) ambiguity has sidelobes ~1/(fc·0.13 s) apart in ε, and at low SNR one can
+        # win: the whole packet searches all of ±v_max again, coherently within 16-chip stretches first
+        fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, pre.tau_s, 0.0, tau_span_s=_TAU_SPAN_SAMPLES / fs_bb,
+                              eps_span=eps_max, segment_chips=16)
         cargo_dec = None
         if n_cargo:
             cargo_dec = decode_block(x_bb, fs_bb, pset, fit.tau_s * fs_bb, fit.eps, 32 + _N_BASE_CHIPS, n_cargo)
