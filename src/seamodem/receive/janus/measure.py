@@ -265,16 +265,13 @@ def fit_delay_scale(
         tau_s, eps = tau_s + d_tau, eps + d_eps
         tau_span_s = 2 * tau_span_s / max(n_tau - 1, 1)
         eps_span = 2 * eps_span / max(n_eps - 1, 1)
-    for _ in range(2):
-        cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
-        # steps: a tenth of a cycle of the highest tone in delay, of the carrier over the packet in scale;
-        # the next grid spans ± one step about the peak
-        n_tau = int(min(max(2 * tau_span_s * pset.used_band_hz * 10, 5), 401)) | 1
-        n_eps = int(min(max(2 * eps_span * fc * duration * 10, 5), 401)) | 1
-        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps)
-        tau_s, eps = tau_s + d_tau, eps + d_eps
-        tau_span_s = 2 * tau_span_s / (n_tau - 1)
-        eps_span = 2 * eps_span / (n_eps - 1)
+    cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)
+    # steps of a tenth of a cycle: of the highest tone in delay, of the carrier over the packet in scale
+    # (the peak is then within a twentieth of a cycle everywhere, where Gauss-Newton converges)
+    n_tau = int(min(max(2 * tau_span_s * pset.used_band_hz * 10, 5), 401)) | 1
+    n_eps = int(min(max(2 * eps_span * fc * duration * 10, 5), 401)) | 1
+    d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps)
+    tau_s, eps = tau_s + d_tau, eps + d_eps
     # Gauss-Newton on the chips' phases from the grid's peak: two steps (σ from the second's linearisation)
     for _ in range(2):
         cc = chip_correlations(x_bb, fs_bb, tones, pset, fs_tx, tau_s, eps)

@@ -33,7 +33,8 @@ from .records import JanusRecord
 __all__ = ["JanusSettings", "receive_janus", "receive_segment", "MIN_MARGIN", "MIN_CARGO_MARGIN"]
 
 #: the base packet's decoded-path margin (Es/N0 along the decoded codeword) a packet needs besides its CRC:
-#: noise gives 0.83 (median), 1.12 at most in 3000 decodings; a packet at -18 dB over 0..fs/2 gives 2-2.6
+#: noise gives 0.83 (median), 1.2 at most in 20 000 decodings (benchmarks/bench_janus.py); a packet at -18 dB
+#: over 0..fs/2 gives 2-2.6
 MIN_MARGIN = 1.5
 #: the cargo's margin for its chips to join the whole-packet fit (no CRC protects the cargo)
 MIN_CARGO_MARGIN = 1.5
