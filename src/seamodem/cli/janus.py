@@ -29,7 +29,7 @@ def add_tx_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "JANUS packets (docs/janus.md)",
         "With --janus, each emission is a JANUS packet (STANAG 4748), made as the reference janus-tx makes it: "
-        "--format pcm16 writes its samples exactly. --count defaults to 1 (the file is then the packet alone); "
+        "--format pcm16 writes its samples exactly; the rate is --sample-rate (default 96000 Hz). --count defaults to 1 (the file is then the packet alone); "
         "packet k's first sample is at START + k·PERIOD, and the sidecar's t_emit_s is its first preamble chip.",
     )
     g.add_argument("--janus", action="store_true", help="emit JANUS packets instead of seamodem frames")

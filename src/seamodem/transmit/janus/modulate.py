@@ -26,7 +26,12 @@ def chip_bounds(n_chips: int, chip_s: float, fs: float) -> np.ndarray:
 
 
 def chip_envelope(n: int, lt: int) -> np.ndarray:
-    """Amplitude of an ``n``-sample chip: half-Hamming ramps of ⌊lt/16⌋ samples at each end, 1 between."""
+    """Amplitude of an ``n``-sample chip: half-Hamming ramps of ⌊lt/16⌋ samples at each end, 1 between.
+
+    The rise is the window's first ⌊lt/16⌋ samples, the fall its samples ⌊lt/8⌋ − ⌊lt/16⌋ − 1 to
+    ⌊lt/8⌋ − 2 (matched on the reference WAVs, where ⌊lt/8⌋ is odd; with an even window length,
+    e.g. 44.1 kHz, that choice is unverified and may differ from the reference by one window sample).
+    """
     ramp = lt // 16
     wlen = lt // 8
     w = 0.54 - 0.46 * np.cos(2 * np.pi * np.arange(wlen) / (wlen - 1)) if wlen > 1 else np.ones(wlen)
