@@ -108,3 +108,29 @@ def test_streaming_in_small_blocks_finds_what_the_whole_recording_gives():
     # slightly differently: arrivals agree well inside their σ
     for a, b in zip(streamed, whole):
         assert abs(a.t_arrival_s - b.t_arrival_s) < 0.5 * b.sigma_range_m / 1500
+
+
+@pytest.mark.parametrize("v", [4.8, -4.8])
+def test_near_the_edge_of_the_doppler_search(v):
+    rng = np.random.default_rng(21)
+    fs, c = 48000, 1500.0
+    w = janus_waveform(JanusPacket.class16_app0(station_id=5), get_parameter_set(1), fs)
+    y = _scaled(w.x_pb, fs, v / c, 0.1)
+    y = y + rng.normal(0, np.sqrt(np.mean(w.x_pb**2)), y.size)  # 0 dB over 0..fs/2
+    (rec,) = receive_janus(y, fs)
+    assert rec.station_id == 5
+    assert abs(rec.v_r_mps - v) < 4 * rec.sigma_v_r_mps
+
+
+def test_clicks_neither_make_packets_nor_hide_one():
+    rng = np.random.default_rng(5)
+    fs = 48000
+    w = janus_waveform(JanusPacket.class16_app0(station_id=8), get_parameter_set(1), fs)
+    rms = np.sqrt(np.mean(w.x_pb**2))
+    y = np.concatenate([np.zeros(fs), w.x_pb, np.zeros(fs)])
+    y = y + rng.normal(0, rms / np.sqrt(10 ** (-6 / 10)), y.size)
+    # 100 clicks of 1 ms, 30 times the packet's rms, before, during and after it
+    for k in rng.integers(0, y.size - 48, 100):
+        y[k : k + 48] += 30 * rms * rng.choice([-1, 1]) * np.exp(-np.arange(48) / 10)
+    recs = receive_janus(y, fs)
+    assert [r.station_id for r in recs] == [8]
