@@ -126,6 +126,9 @@ ELSEWHERE = {
     "StationIdentifier=42,ParameterSetIdentifier=1 -o janus_beacon.wav": "tests/cli/test_janus_docs.py",
     "seamodem rx --janus janus_beacon.wav -o janus_meas.csv": "tests/cli/test_janus_docs.py",
     "seamodem config --list": "tests/cli/test_janus_docs.py",
+    "seamodem channel janus_beacon.wav --scenario examples/scenarios/straight_line.toml -o janus_received.wav":
+        "tests/cli/test_janus_docs.py",
+    "seamodem rx --janus janus_received.wav -o janus_received.csv": "tests/cli/test_janus_docs.py",
     "seamodem rx RECORDING.wav [--config SIDECAR.json] -o MEAS.csv": "a synopsis (placeholders)",
     "seamodem rx RECORDING.wav --emit-start 0 --emit-period 3 -o MEAS.csv":
         "a synopsis; docs/guide.md's 'seamodem rx sea.wav --emit-start 0 --emit-period 3' runs here",

@@ -1,5 +1,6 @@
 """docs/janus.md's commands, run as written in page order, and what they write checked."""
 
+import json
 import re
 import shlex
 from pathlib import Path
@@ -22,8 +23,9 @@ def page_commands() -> list[str]:
 
 def test_janus_page_commands_run_and_do_what_the_page_says(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
     commands = page_commands()
-    assert len(commands) == 5
+    assert len(commands) == 7
     for command in commands:
         assert main(shlex.split(command)[1:]) == 0, command
     out = capsys.readouterr().out
@@ -37,3 +39,8 @@ def test_janus_page_commands_run_and_do_what_the_page_says(tmp_path, monkeypatch
     assert (meas["station_id"] == 42).all() and (meas["pset_id"] == 1).all()
     # noiseless, same clock: the range is 0 to far below a sample at 96 kHz (16 mm)
     assert meas["range_m"].abs().max() < 1e-3
+    # through shallow water: every packet, its range within 3σ of the simulator's direct path
+    received = pd.read_csv(tmp_path / "janus_received.csv")
+    truth = pd.DataFrame(json.loads((tmp_path / "janus_received.json").read_text())["truth"])
+    m = received.merge(truth[["frame_index", "range_true_m"]], on="frame_index")
+    assert len(m) == 5 and (abs(m["range_m"] - m["range_true_m"]) <= 3 * m["sigma_range_m"]).all()

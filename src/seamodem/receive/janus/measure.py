@@ -146,9 +146,13 @@ def _regressors(cc: ChipCorrelations, fc_hz: float) -> tuple[np.ndarray, np.ndar
 
 
 def _grid_peak(cc: ChipCorrelations, fc_hz: float, tau_span: float, eps_span: float, n_tau: int, n_eps: int,
-               segments: list[np.ndarray] | None = None):
+               segments: list[np.ndarray] | None = None, earliest: float | None = None):
     """Peak of |Σ c_i e^{j(d_tau δτ + d_eps δε)}|² on a grid; with ``segments``, of Σ_s |Σ_{i ∈ s} …|²
-    (coherent within each stretch of chips only: free of the whole packet's sidelobes in ε)."""
+    (coherent within each stretch of chips only: free of the whole packet's sidelobes in ε).
+
+    With ``earliest``, the earliest local peak in δτ (at its best δε) whose amplitude is at least that
+    fraction of the highest: the first arrival, not merely the strongest (a packet's own delay
+    sidelobes stay below 0.2 of its peak beyond its main lobe)."""
     d_tau, d_eps = _regressors(cc, fc_hz)
     taus = np.linspace(-tau_span, tau_span, n_tau)
     epss = np.linspace(-eps_span, eps_span, n_eps)
@@ -160,7 +164,17 @@ def _grid_peak(cc: ChipCorrelations, fc_hz: float, tau_span: float, eps_span: fl
     else:
         p = sum(np.abs(a[:, g] @ b[g, :]) ** 2 for g in segments)
     i, j = np.unravel_index(np.argmax(p), p.shape)
+    if earliest is not None:
+        amp = np.sqrt(p.max(axis=1)) if segments is not None else p.max(axis=1)
+        peaks = [k for k in range(len(amp)) if amp[k] >= earliest * amp[i]
+                 and (k == 0 or amp[k] >= amp[k - 1]) and (k == len(amp) - 1 or amp[k] >= amp[k + 1])]
+        i = peaks[0] if peaks else i
+        j = int(np.argmax(p[i]))
     return taus[i], epss[j]
+
+
+#: an earlier delay peak at least this share of the highest is taken as the first arrival
+_FIRST_ARRIVAL_SHARE = 0.5
 
 
 def _excess_scatter(res: np.ndarray, w: np.ndarray) -> float:
@@ -261,7 +275,7 @@ def fit_delay_scale(
         segments = np.array_split(np.arange(len(tones)), n_seg)
         n_tau = int(min(max(2 * tau_span_s * pset.used_band_hz * 10, 3), 401)) | 1
         n_eps = int(min(max(2 * eps_span * fc * duration / n_seg * 10, 3), 401)) | 1
-        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps, segments)
+        d_tau, d_eps = _grid_peak(cc, fc, tau_span_s, eps_span, n_tau, n_eps, segments, earliest=_FIRST_ARRIVAL_SHARE)
         tau_s, eps = tau_s + d_tau, eps + d_eps
         tau_span_s = 2 * tau_span_s / max(n_tau - 1, 1)
         eps_span = 2 * eps_span / max(n_eps - 1, 1)
