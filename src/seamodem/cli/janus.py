@@ -167,13 +167,14 @@ def run_rx(args: argparse.Namespace) -> int:
     source = open_recording(recording)
     channel = source.one_channel(args.channel)
     fs = source.sample_rate_hz
-    settings = JanusSettings(pset=_pset(args), sound_speed_mps=c, v_max_mps=args.v_max, emissions=emissions)
+    settings = JanusSettings(pset=_pset(args), sound_speed_mps=c, v_max_mps=args.v_max, emissions=emissions,
+                             clock_offset_s=args.clock_offset)
     # streamed: records reach the file as packets are found, and a long recording is held 20 s at a time
     records = JanusReceiver(fs, settings).run(channel_blocks(source, channel))
     header = {
         "created_by": command_line(), "recording": str(recording), "sample_rate_hz": fs, "channel": channel,
         "sound_speed_mps": c,
-        "v_max_mps": settings.v_max_mps, "pset": settings.pset.to_dict(),
+        "v_max_mps": settings.v_max_mps, "clock_offset_s": settings.clock_offset_s, "pset": settings.pset.to_dict(),
         "t_arrival": "first preamble chip", "v_r_source": "whole packet (data-aided, after decoding)",
         "snr_definition": "in-band SNR over the available bandwidth B, from the whole-packet fit",
     }

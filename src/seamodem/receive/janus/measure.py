@@ -251,6 +251,26 @@ def _fading_rate(cc: ChipCorrelations, model_phase: np.ndarray, amplitude: float
     return float(np.sqrt(slope**2 - 1 / sxx))
 
 
+def _phase_drift(res: np.ndarray, w: np.ndarray, t: np.ndarray) -> float:
+    """Curvature of the residual phases over the packet beyond the noise [rad/s²].
+
+    One path at a constant speed leaves none; a fading or beating echo turns the merged phase
+    unevenly, and its mean slope (the Doppler) is then off by about the curvature times half the
+    packet. Zero unless 3 σ beyond its noise.
+    """
+    tc = t - np.sum(w * t) / np.sum(w)
+    q = tc**2 - np.sum(w * tc**2) / np.sum(w)
+    # q's part not explained by the linear term (the fit removed constant and slope already)
+    q = q - tc * np.sum(w * q * tc) / np.sum(w * tc**2)
+    sqq = np.sum(w * q**2)
+    if sqq <= 0:
+        return 0.0
+    kappa = np.sum(w * q * res) / sqq
+    if kappa**2 * sqq < 9:
+        return 0.0
+    return float(np.sqrt(kappa**2 - 1 / sqq))
+
+
 def fit_delay_scale(
     x_bb: np.ndarray, fs_bb: float, tones: np.ndarray, pset: JanusParameterSet, fs_tx: float, tau_s: float, eps: float,
     *, tau_span_s: float, eps_span: float, segment_chips: int | None = None,
@@ -306,6 +326,7 @@ def fit_delay_scale(
     model_phase = theta + (resid_phase - res)
     cov[1, 1] += _ripple_delay_s(cc, model_phase, amplitude, n0) ** 2
     cov[2, 2] += (_fading_rate(cc, model_phase, amplitude, n0) / (2 * np.pi * fc)) ** 2
+    cov[2, 2] += (_phase_drift(res, w, cc.t_rel_s) * duration / 2 / (2 * np.pi * fc)) ** 2
     rho = abs(np.sum(cc.c)) / np.sqrt(np.sum(cc.energy) * np.sum(cc.rx_energy))
     return ScaleDelayFit(
         tau_s=float(tau_s), eps=float(eps), sigma_tau_s=float(np.sqrt(cov[1, 1])), sigma_eps=float(np.sqrt(cov[2, 2])),

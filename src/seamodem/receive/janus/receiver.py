@@ -42,6 +42,8 @@ _N_BASE_CHIPS = 144
 #: arrival searched ± this many baseband samples about the detector's start: its tone-share peak is
 #: flat over a few samples at low SNR (a tenth of a chip)
 _TAU_SPAN_SAMPLES = 4.0
+#: below this coherence (coherent over non-coherent Es/N0) the packet's phase did not follow the model
+_MIN_COHERENCE = 0.05
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -62,6 +64,8 @@ class JanusSettings:
         Decoded-path margin the base packet needs besides its CRC.
     emissions : Emissions, optional
         When packets were sent (their preamble's first chip); without, tof and range are NaN.
+    clock_offset_s : float
+        Receiver clock minus beacon clock [s], taken off every time of flight.
     """
 
     pset: JanusParameterSet | None = None
@@ -70,6 +74,7 @@ class JanusSettings:
     threshold: float = DETECTION_THRESHOLD
     min_margin: float = MIN_MARGIN
     emissions: Emissions | None = None
+    clock_offset_s: float = 0.0
 
     def __post_init__(self):
         if self.pset is None:
@@ -80,11 +85,13 @@ class JanusSettings:
             raise ValueError(f"v_max_mps must be in [0, 50], got {self.v_max_mps!r}")
 
 
-def _record(packet: JanusPacket, fit, pre, base, cargo_dec, settings: JanusSettings, stat: float) -> JanusRecord:
+def _record(packet: JanusPacket, fit, pre, base, cargo_dec, settings: JanusSettings, stat: float,
+            coherence: float) -> JanusRecord:
     c = settings.sound_speed_mps
     fields = packet.fields()
-    frame_index, t_emit = (-1, math.nan) if settings.emissions is None else settings.emissions.frame_for(fit.tau_s)
-    tof = fit.tau_s - t_emit
+    t_beacon = fit.tau_s - settings.clock_offset_s  # the arrival on the beacon's clock
+    frame_index, t_emit = (-1, math.nan) if settings.emissions is None else settings.emissions.frame_for(t_beacon)
+    tof = t_beacon - t_emit
     text = ""
     if cargo_dec is not None:
         stripped = cargo_dec.data.rstrip(b"\0")
@@ -97,7 +104,7 @@ def _record(packet: JanusPacket, fit, pre, base, cargo_dec, settings: JanusSetti
         v_r_bank_mps=c * pre.eps, detection_z=stat, detection_rho=fit.rho, sigma_range_m=c * fit.sigma_tau_s,
         sigma_v_r_mps=c * fit.sigma_eps, sigma_v_r_bank_mps=c * pre.sigma_eps, tone_c_n0_dbhz=math.nan,
         crc_ok=True, payload_hex=cargo_dec.data.hex() if cargo_dec is not None else "", payload_text=text,
-        v_r_source="whole_packet", n_paths=1,
+        v_r_source="whole_packet" if coherence >= _MIN_COHERENCE else "whole_packet_incoherent", n_paths=1,
         packet_hex=packet.to_bytes().hex(), version=packet.version, mobility=packet.mobility,
         schedule=packet.schedule, tx_rx=packet.tx_rx, forward=packet.forward, class_user_id=packet.class_user_id,
         application_type=packet.application_type, application_data=packet.application_data,
@@ -106,7 +113,7 @@ def _record(packet: JanusPacket, fit, pre, base, cargo_dec, settings: JanusSetti
         cargo_text=text, agreement=base.agreement, margin=base.margin,
         cargo_margin=cargo_dec.margin if cargo_dec is not None else math.nan,
         t_arrival_preamble_s=pre.tau_s, sigma_t_preamble_s=pre.sigma_tau_s,
-        scale_eps=fit.eps,
+        scale_eps=fit.eps, coherence=coherence,
     )
 
 
@@ -194,10 +201,17 @@ def receive_segment(
                 tones = 2 * hop_slots(all_bits.size, pset) + all_bits
                 fit = fit_delay_scale(x_bb, fs_bb, tones, pset, fs, fit.tau_s, fit.eps,
                                       tau_span_s=max(4 * fit.sigma_tau_s, 2e-6), eps_span=max(5 * fit.sigma_eps, 1e-7))
+        # the coherent fit's Es/N0 against the tones' (non-coherent) Es/N0: ≈ 1 when the packet's phase
+        # follows the model; far below when fading or beating echoes turn it: the arrival and the scale
+        # are then known to a resolution cell only (1/U in delay, a 16-chip stretch's in scale)
+        coherence = fit.snr_chip / max(base.es_n0, 1e-30)
+        if coherence < _MIN_COHERENCE:
+            fit = replace(fit, sigma_tau_s=max(fit.sigma_tau_s, 1 / pset.used_band_hz),
+                          sigma_eps=max(fit.sigma_eps, 1 / (pset.fc_hz * 16 * pset.chip_s)))
         busy_until = fit.tau_s + n_chips * pset.chip_s / (1 + fit.eps) - pset.chip_s
         fit = replace(fit, tau_s=fit.tau_s + t0_s)
         pre = replace(pre, tau_s=pre.tau_s + t0_s)
-        records.append(_record(packet, fit, pre, base, cargo_dec, settings, cand.statistic))
+        records.append(_record(packet, fit, pre, base, cargo_dec, settings, cand.statistic, coherence))
     return records, max(stop_s, t0_s + busy_until)
 
 

@@ -35,6 +35,11 @@ class JanusRecord(MeasurementRecord):
         Arrival of the first preamble chip from the preamble alone, and its σ [s].
     scale_eps : float
         Whole-packet time scale ε (v_r = c·ε).
+    coherence : float
+        The whole-packet fit's Es/N0 over the tones' non-coherent Es/N0: about 1 when the packet's
+        phase follows one path's delay and Doppler; below 0.05 (``v_r_source`` then
+        ``whole_packet_incoherent``) fading or beating echoes turned it, and σ's are widened to a
+        resolution cell.
     """
 
     packet_hex: str = ""
@@ -57,6 +62,7 @@ class JanusRecord(MeasurementRecord):
     t_arrival_preamble_s: float = math.nan
     sigma_t_preamble_s: float = math.nan
     scale_eps: float = math.nan
+    coherence: float = math.nan
 
 
 JANUS_FIELDS = tuple(f.name for f in dataclasses.fields(JanusRecord))
