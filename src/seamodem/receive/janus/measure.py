@@ -279,6 +279,20 @@ def fit_delay_scale(
 
     Parameters
     ----------
+    x_bb : numpy.ndarray
+        Baseband about fc, sample m at m / fs_bb [s].
+    fs_bb : float
+        Its rate [Hz].
+    tones : numpy.ndarray, shape (n_chips,)
+        Tone index of every chip from the first preamble chip.
+    pset : JanusParameterSet
+        Parameter set.
+    fs_tx : float
+        The transmitter's sample rate [Hz] (taken as the recording's).
+    tau_s, eps : float
+        Starting arrival of the first preamble chip [s] and time scale.
+    tau_span_s, eps_span : float
+        Searched ± about them.
     segment_chips : int, optional
         First search the spans with the chips summed coherently only within stretches of this many
         (a wide search in ε without the whole packet's sidelobes), then coherently about its peak.
