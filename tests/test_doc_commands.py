@@ -123,6 +123,16 @@ ELSEWHERE = {
     "[--depth 5 2 | --depth-log DEPTH.csv --beacon-depth 2]": "a synopsis (optional arguments in brackets)",
     "seamodem nav track MEAS.csv --imu IMU.csv --geodetic --beacon 48.38243,-4.407295 --start 48.3822,-4.4079 "
     "-o track.csv": "needs the user's MEAS.csv and IMU.csv logged near Brest",
+    "seamodem tx --janus --sample-rate 48000 --format pcm16 --packet-cargo \"Hello JANUS\" -o hello.wav":
+        "tests/cli/test_janus_docs.py runs docs/janus.md's blocks as written",
+    "seamodem rx --janus hello.wav -o hello.csv": "tests/cli/test_janus_docs.py",
+    "seamodem tx --janus --sample-rate 96000 --count 5 --period 3 --wut 1 --packet-app-fields "
+    "StationIdentifier=42,ParameterSetIdentifier=1 -o janus_beacon.wav": "tests/cli/test_janus_docs.py",
+    "seamodem rx --janus janus_beacon.wav -o janus_meas.csv": "tests/cli/test_janus_docs.py",
+    "seamodem config --list": "tests/cli/test_janus_docs.py",
+    "seamodem channel janus_beacon.wav --scenario examples/scenarios/straight_line.toml -o janus_received.wav":
+        "tests/cli/test_janus_docs.py",
+    "seamodem rx --janus janus_received.wav -o janus_received.csv": "tests/cli/test_janus_docs.py",
     "seamodem rx RECORDING.wav [--config SIDECAR.json] -o MEAS.csv": "a synopsis (placeholders)",
     "seamodem nav track meas.csv --imu imu.csv --beacon 45,-25 --start 0,0 --depth 5 25 --sound-speed-profile "
     "examples/water/thermocline_svp.csv -o track.csv":

@@ -1,7 +1,7 @@
 """The channel's file-level input and output: the input recording and its sidecar, OUT.wav and OUT.json.
 
-:func:`read_input` and :func:`read_reference_input` read and check an input
-recording (a frame beacon's or a reference beacon's); :func:`write_outputs`
+:func:`read_input`, :func:`read_reference_input` and :func:`read_janus_input` read and check an
+input recording (a frame beacon's, a reference beacon's or a JANUS beacon's); :func:`write_outputs`
 runs a simulation into OUT.wav (through a temporary scratch file beside it)
 and writes OUT.json, the two atomically.
 """
@@ -26,6 +26,7 @@ from ..io.wav import wav_info
 __all__ = [
     "read_input",
     "read_reference_input",
+    "read_janus_input",
     "OUTPUT_PEAK_LIMIT",
     "OUTPUT_PEAK",
     "write_outputs",
@@ -136,6 +137,39 @@ def read_reference_input(in_wav: str | Path) -> tuple[soundfile._SoundFileInfo, 
     _check_input(in_wav, info, side_in)
     band = (min(r.f_low_hz for r in refs), max(r.f_high_hz for r in refs))
     return info, side_in, max(r.duration_s for r in refs), band
+
+
+def read_janus_input(in_wav: str | Path) -> tuple[soundfile._SoundFileInfo, dict, float, tuple[float, float], float] | None:
+    """Header, sidecar, longest packet [s], band [Hz] and centre [Hz] of a ``seamodem tx --janus`` beacon; None for others.
+
+    The frames' ``t_emit_s`` are their first preamble chips: the truth is the arrival of that chip.
+
+    Raises
+    ------
+    InputFileError
+        As :func:`read_input`; a JANUS sidecar without its parameter set or frames.
+    """
+    import json
+
+    in_wav = Path(in_wav)
+    try:
+        side_in = json.loads(sidecar_path(in_wav).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    from ..transmit.janus.beacon import JANUS_SIDECAR_FORMAT
+
+    if not isinstance(side_in, dict) or side_in.get("format") != JANUS_SIDECAR_FORMAT:
+        return None
+    try:
+        pset = side_in["janus"]["pset"]
+        chip_s = 2.0 ** pset["chip_len_exp"] / round(pset["bandwidth_hz"] / 26)
+        longest = max(int(f["n_chips"]) for f in side_in["frames"]) * chip_s
+        band = (pset["fc_hz"] - pset["bandwidth_hz"] / 2, pset["fc_hz"] + pset["bandwidth_hz"] / 2)
+    except (KeyError, TypeError, ValueError):
+        raise InputFileError(f"JANUS sidecar {sidecar_path(in_wav)} lacks its parameter set or frames") from None
+    info = wav_info(in_wav)
+    _check_input(in_wav, info, side_in)
+    return info, side_in, longest, band, float(pset["fc_hz"])
 
 
 #: An output whose peak exceeds this fraction of full scale is scaled down to OUTPUT_PEAK, so that

@@ -35,6 +35,7 @@ from .files import (  # noqa: F401  (re-exported: defined here before the split)
     OUTPUT_PEAK,
     OUTPUT_PEAK_LIMIT,
     read_input,
+    read_janus_input,
     read_reference_input,
     write_outputs,
 )
@@ -217,7 +218,7 @@ def simulate_file(
     Parameters
     ----------
     in_wav : str or Path
-        The transmitted recording (``seamodem tx``: frames or reference pings) with its sidecar.
+        The transmitted recording (``seamodem tx``: frames, reference pings or JANUS packets) with its sidecar.
     scenario : Scenario
         The channel.
     out_wav : str or Path
@@ -241,9 +242,12 @@ def simulate_file(
     """
     out_wav = check_writable(out_wav)
     reference = read_reference_input(in_wav)  # a schedule of reference pings (seamodem tx --reference)
+    janus = read_janus_input(in_wav)  # JANUS packets (seamodem tx --janus)
     if reference is not None:
         info, side_in, frame_duration_s, band_hz = reference
         centre_hz = 0.5 * (band_hz[0] + band_hz[1])
+    elif janus is not None:
+        info, side_in, frame_duration_s, band_hz, centre_hz = janus
     else:
         info, side_in, config = read_input(in_wav)
         frame_duration_s, band_hz, centre_hz = config.frame_duration_s, config.data_band_hz, config.carrier_hz

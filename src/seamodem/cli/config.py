@@ -17,7 +17,7 @@ def add_parser(sub) -> None:
         description="Print the configuration that --preset/--config/--set give (TOML), with its derived figures.",
     )
     add_config_options(p)
-    p.add_argument("--list", action="store_true", help="list the presets and where their values come from")
+    p.add_argument("--list", action="store_true", help="list the presets and where their values come from, and the JANUS parameter sets")
     p.add_argument("-o", "--output", metavar="FILE", help="write the configuration to FILE (.toml or .json)")
     p.set_defaults(run=run)
 
@@ -26,6 +26,9 @@ def run(args: argparse.Namespace) -> int:
     if args.list:
         for name in PRESETS:
             print(f"{name}: {PRESET_NOTES[name]}")
+        from .janus import parameter_sets_text
+
+        print(parameter_sets_text())
         return 0
     config = config_from_args(args)
     if args.output:

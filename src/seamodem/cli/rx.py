@@ -113,6 +113,9 @@ def add_parser(sub) -> None:
     from .rx_reference import add_reference_options  # --reference: ranging on other waveforms
 
     add_reference_options(p)
+    from .janus import add_rx_options  # --janus: JANUS packets
+
+    add_rx_options(p)
 
 
 def _add_batch_options(p: argparse.ArgumentParser) -> None:

@@ -49,10 +49,17 @@ def add_parser(sub) -> None:
     )
     ref.add_argument("--sample-rate", type=float, default=96000.0, metavar="HZ", help="WAV rate for references (default 96000)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    from .janus import add_tx_options  # --janus: JANUS packets
+
+    add_tx_options(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.janus:
+        from .janus import run_tx
+
+        return run_tx(args)
     if args.reference:
         return _run_references(args)
     from ..transmit.beacon import BeaconSchedule, payloads_from_bytes, payloads_from_text, write_beacon

@@ -23,7 +23,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..config import CONV_TAIL_BITS, CRC_SCHEMES, LENGTH_HEADER_BYTES, FrameConfig
+from ..config import CRC_SCHEMES, LENGTH_HEADER_BYTES, FrameConfig
 from ..errors import PayloadError
 
 __all__ = [
@@ -86,25 +86,32 @@ def crc(data: bytes, scheme: str) -> bytes:
     raise ValueError(f"crc must be one of {sorted(CRC_SCHEMES)}, got {scheme!r}")
 
 
-def conv_encode(bits: np.ndarray) -> np.ndarray:
-    """Encode with the K = 7 (133, 171) code, zero-terminated.
+def conv_encode(
+    bits: np.ndarray, *, generators: tuple[int, ...] = CONV_GENERATORS, constraint_length: int = CONSTRAINT_LENGTH
+) -> np.ndarray:
+    """Encode with the K = 7 (133, 171) code (or the given one), zero-terminated.
 
     Parameters
     ----------
     bits : numpy.ndarray, shape (n,)
         Information bits (0/1).
+    generators : tuple of int
+        Generator polynomials (octal by convention), MSB tapping the newest input bit.
+    constraint_length : int
+        K: the encoder appends K − 1 zero tail bits.
 
     Returns
     -------
-    numpy.ndarray, shape (2·(n + 6),)
+    numpy.ndarray, shape (2·(n + K − 1),)
         Coded bits c0[0], c1[0], c0[1], c1[1], … The tail drives the encoder
         back to the all-zero state.
     """
-    u = np.concatenate([np.asarray(bits, dtype=np.int64), np.zeros(CONV_TAIL_BITS, dtype=np.int64)])
-    out = np.empty((u.size, 2), dtype=np.uint8)
-    for j, g in enumerate(CONV_GENERATORS):
+    k = constraint_length
+    u = np.concatenate([np.asarray(bits, dtype=np.int64), np.zeros(k - 1, dtype=np.int64)])
+    out = np.empty((u.size, len(generators)), dtype=np.uint8)
+    for j, g in enumerate(generators):
         # tap i of the generator (MSB = current input) multiplies u[n − i]
-        taps = np.array([(g >> (CONSTRAINT_LENGTH - 1 - i)) & 1 for i in range(CONSTRAINT_LENGTH)])
+        taps = np.array([(g >> (k - 1 - i)) & 1 for i in range(k)])
         out[:, j] = np.convolve(u, taps)[: u.size] % 2
     return out.ravel()
 
