@@ -8,10 +8,11 @@ of a fading or merged path (errors 10–60 of it before the unmodelled terms of
 ``seamodem.receive.frame.unmodelled_sigmas``) fails.
 
 Not asserted, because not met (issue 25 item 2, open; benchmarks/results/bench_corpus.txt):
-the far family's range (a surface echo ~20–35 µs behind the direct path, merged with it; see
-docs/receiver.md), and the fading family's v_r (a Rician-fading direct path whose phase drift looks
-like Doppler: on seed 31002, frames decoded after turbo passes or echo cancellation are 3.4–5.3σ off,
-0.83 within 3σ over the 600-frame report).
+the far family's range (a surface echo ~8–36 µs behind the direct path, merged with it, biases the
+arrival by +1–2 cm with no signature one frame shows; see docs/receiver.md: on seed 31001 the five
+frames are 7.9–10.8σ off). The fading family's v_r is asserted since session 9 (its rate term less its
+noise expectation and the two-carrier check: on seed 31002 the five frames were 3.4–5.3σ off before,
+0.06–1.22σ now).
 """
 
 from __future__ import annotations
@@ -46,10 +47,9 @@ def _z(rows, what):
 
 
 @pytest.mark.slow
-def test_v_r_sigma_covers_the_error_off_the_fading_family(rows):
-    steady = [r for r in rows if r["family"] != "fading"]
-    assert len(steady) >= 2 * FRAMES
-    z = _z(steady, "v_r")
+def test_v_r_sigma_covers_the_error_in_every_family(rows):
+    assert len(rows) >= 3 * FRAMES
+    z = _z(rows, "v_r")
     assert np.all(np.isfinite(z))
     assert np.mean(z <= 3) >= 0.9, np.sort(z)[-5:]
     assert np.max(z) <= 6, np.sort(z)[-5:]
