@@ -358,12 +358,18 @@ class ToneFit:
         with their own Doppler, which pull the fitted line, or are the line
         taken when stronger than the direct path's. 0 when none stands out of
         the noise.
+    amp_rate_hz : float
+        RMS rate of the tone's log-amplitude over the frame [1/s] (line and
+        parabola through 16 segments' ln|Σ w x e^{−j2πft}|, each term less its
+        noise expectation): a fading or beating tone's phase wanders at the
+        same scale, a speed error c·rate/(2π f_pt).
     """
 
     offset_hz: float
     amplitude: complex
     c_n0_hz: float
     spread_hz: float = 0.0
+    amp_rate_hz: float = 0.0
 
 
 #: a residual spectral line counts when its periodogram bin stands above the noise floor by ln(bins / this):
@@ -441,7 +447,40 @@ def tone_frequency_ml(
     variance = float(np.mean(np.abs(resid) ** 2))
     c_n0 = abs(amplitude) ** 2 * noise_bandwidth_hz / max(variance, np.finfo(float).tiny)
     spread = _line_spread_hz(weights * (x - amplitude * basis), wx, grid, n_fft, f, search_hz=search_hz)
-    return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0), spread_hz=spread)
+    # the white noise's variance from the residual's sample-to-sample differences: a fading tone's slow
+    # amplitude changes, which the residual also holds, are what the rate is to measure, not noise
+    white = float(np.mean(np.abs(np.diff(resid)) ** 2)) / 2 if resid.size > 1 else variance
+    rate = _amplitude_rate_hz(wx * np.exp(-2j * np.pi * f * tc), weights, tc, white)
+    return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0), spread_hz=spread,
+                   amp_rate_hz=rate)
+
+
+#: segments of the tone whose log-amplitudes give its rate (``ToneFit.amp_rate_hz``)
+_TONE_SEGMENTS = 16
+
+
+def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float) -> float:
+    """RMS rate [1/s] of ln|Σ y| over ``_TONE_SEGMENTS`` segments of equal weight (y = w·x·e^{−j2πft},
+    the tone at its fitted frequency): a line and a parabola in time, weighted by each segment's
+    ln-amplitude noise variance noise_var·Σw²/(2|Σy|²), each squared coefficient less its variance."""
+    w2 = weights**2
+    cum = np.cumsum(w2)
+    if cum[-1] <= 0:
+        return 0.0
+    seg = np.minimum((cum / cum[-1] * _TONE_SEGMENTS).astype(int), _TONE_SEGMENTS - 1)
+    sums = np.bincount(seg, y.real, _TONE_SEGMENTS) + 1j * np.bincount(seg, y.imag, _TONE_SEGMENTS)
+    energy = np.bincount(seg, w2, _TONE_SEGMENTS)
+    times = np.bincount(seg, w2 * tc, _TONE_SEGMENTS) / np.maximum(energy, np.finfo(float).tiny)
+    power = np.abs(sums) ** 2
+    if np.any(energy <= 0) or np.any(power <= 0):
+        return 0.0
+    var = np.maximum(noise_var * energy / (2 * power), 1e-12)
+    design = np.column_stack([np.ones(_TONE_SEGMENTS), times, times**2])
+    cov = np.linalg.inv(design.T @ (design / var[:, None]))
+    a = cov @ (design.T @ (np.log(np.sqrt(power) / energy) / var))
+    span2 = (float(times[-1] - times[0]) * _TONE_SEGMENTS / (_TONE_SEGMENTS - 1)) ** 2 / 3
+    ms = max(a[1] ** 2 - cov[1, 1], 0.0) + max(a[2] ** 2 - cov[2, 2], 0.0) * span2
+    return float(math.sqrt(ms))
 
 
 def tone_track_eq9(

@@ -564,6 +564,9 @@ class FrameMeasurer:
         # the tone sums every path: echoes with their own Doppler are lines of their own in its band, which
         # pull the fitted one or are the one taken (the stronger); their spread is the tone's honest scale
         sigma_tone = math.hypot(sigma_tone, m.tone.spread_hz * c / self.config.tone_hz)
+        # and a fading tone (or one beating with a merged echo): its log-amplitude rate, the same scale as
+        # its phase's wander (as the whole-frame fit's term)
+        sigma_tone = math.hypot(sigma_tone, m.tone.amp_rate_hz * c / (2 * math.pi * self.config.tone_hz))
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
