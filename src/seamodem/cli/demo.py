@@ -37,6 +37,9 @@ def add_parser(sub) -> None:
                    help="also record the beacon with a hydrophone array on the vehicle (tetra[:APERTURE_M], circleN, "
                         "lineN or a TOML/JSON file, as seamodem channel --array) and compare it with one hydrophone: "
                         "frames, FER, bearing error, one-frame fix (DIR/measurements_array.csv; docs/array.md)")
+    p.add_argument("--waveform", choices=("frame", "janus"), default="frame",
+                   help="what the beacon emits: jmse2024 frames (default) or JANUS packets, parameter set 1, "
+                        "received by the JANUS receiver (docs/janus.md; no psd.png, constellation.png or --array)")
     p.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")
     p.add_argument("--images", metavar="DIR", help=argparse.SUPPRESS)  # docs/images/demo_map.png for the README
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing")
@@ -51,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
         raise SeamodemError(f"output: {out} exists and is not a folder")
     if args.seed < 0:
         raise SeamodemError(f"seed: must be >= 0, got {args.seed}")
-    cfg = DemoConfig(tcom_s=args.tcom, duration_s=args.duration, snr_db=args.snr, seed=args.seed, array=args.array)
+    cfg = DemoConfig(tcom_s=args.tcom, duration_s=args.duration, snr_db=args.snr, seed=args.seed, array=args.array,
+                     waveform=args.waveform)
     if not args.quiet:
         print(f"seamodem demo: {cfg.frame_count()} frames, one every {cfg.tcom_s:g} s, "
               f"{cfg.mission_s():.0f} s mission; writing {out}/ ...", flush=True)

@@ -11,7 +11,15 @@ import numpy as np
 from ..config import FrameConfig, get_preset
 from ..errors import ConfigError
 
-__all__ = ["FILTERS", "FILTER_LABELS", "FILTER_COLOURS", "DemoConfig", "VehicleRun", "receiver_settings"]
+__all__ = ["FILTERS", "FILTER_LABELS", "FILTER_COLOURS", "WAVEFORMS", "JANUS_SAMPLE_RATE_HZ", "DemoConfig", "VehicleRun",
+           "receiver_settings"]
+
+#: What the demo's beacon emits: the preset's frames, or JANUS packets (parameter set 1; :mod:`.janus`).
+WAVEFORMS = ("frame", "janus")
+#: The JANUS beacon's sample rate [Hz] (docs/janus.md's beacon rate).
+JANUS_SAMPLE_RATE_HZ = 96000
+#: Time a JANUS packet's echoes and the travel over the survey need after the packet [s] (the T_com check).
+JANUS_ECHO_MARGIN_S = 0.1
 
 #: Positioning filters compared by the demo: the inertial filter and its batch smoother (docs/navigation.md),
 #: and paper 000's EKF (proposed = range + v_r) and ROSB (range only).
@@ -63,6 +71,9 @@ class DemoConfig:
         A hydrophone array (a preset such as ``tetra:0.08`` or a TOML/JSON file,
         as ``seamodem channel --array``): also run the mission's recording
         through it (step 7). None: one hydrophone only.
+    waveform : str
+        ``"frame"`` (the preset's frames) or ``"janus"`` (a JANUS base packet every T_com,
+        parameter set 1, received by the JANUS receiver; no array).
     """
 
     preset: str = "jmse2024"
@@ -86,9 +97,14 @@ class DemoConfig:
     sigma_accel_mps2: float = math.sqrt(0.005)
     seed: int = 1
     array: str | None = None
+    waveform: str = "frame"
 
     def __post_init__(self):
         get_preset(self.preset)  # raises ConfigError naming the preset
+        if self.waveform not in WAVEFORMS:
+            raise ConfigError("waveform", f"must be one of {', '.join(WAVEFORMS)}, got {self.waveform!r}")
+        if self.waveform == "janus" and self.array is not None:
+            raise ConfigError("array", "the array mission takes frames only (waveform frame)")
         if self.array is not None:
             from ..channel.array import load_array
             from ..receive.array import array_geometry
@@ -100,6 +116,9 @@ class DemoConfig:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ConfigError(name, f"must be a positive number, got {value!r}")
+        if self.waveform == "janus" and not self.tcom_s > self.emission_s + JANUS_ECHO_MARGIN_S:
+            raise ConfigError("tcom_s", f"must exceed a JANUS packet ({self.emission_s:.3f} s) plus "
+                              f"{JANUS_ECHO_MARGIN_S:g} s for its echoes and travel, got {self.tcom_s:g}")
         if self.duration_s is not None and not (math.isfinite(self.duration_s) and self.duration_s >= self.tcom_s):
             raise ConfigError("duration_s", f"must be at least tcom_s = {self.tcom_s:g} s, got {self.duration_s!r}")
         if isinstance(self.n_lanes, bool) or not isinstance(self.n_lanes, int) or self.n_lanes < 2:
@@ -117,6 +136,28 @@ class DemoConfig:
     @property
     def frame_config(self) -> FrameConfig:
         return get_preset(self.preset)
+
+    @property
+    def janus_pset(self):
+        """The JANUS beacon's parameter set (set 1).
+
+        Returns
+        -------
+        JanusParameterSet
+        """
+        from ..transmit.janus import get_parameter_set
+
+        return get_parameter_set(1)
+
+    @property
+    def emission_s(self) -> float:
+        """One emission's length [s]: the preset's frame, or the JANUS packet with its padding."""
+        if self.waveform == "frame":
+            return self.frame_config.frame_duration_s
+        from ..transmit.janus import janus_waveform
+        from .janus import janus_packet
+
+        return janus_waveform(janus_packet(), self.janus_pset, JANUS_SAMPLE_RATE_HZ).x_pb.size / JANUS_SAMPLE_RATE_HZ
 
     def path(self):
         """The desired survey path.

@@ -126,7 +126,7 @@ def write_track_csv(path: Path, vehicle: VehicleRun, depth_m: float) -> None:
 
 
 def emit_and_propagate(cfg: DemoConfig, vehicle: VehicleRun, folder: Path, *, progress: bool | None = False) -> dict:
-    """Write ``beacon.wav`` (the frames) and ``received.wav`` (the hydrophone) in ``folder``.
+    """Write ``beacon.wav`` (the frames, or JANUS packets: :mod:`.janus`) and ``received.wav`` (the hydrophone) in ``folder``.
 
     Parameters
     ----------
@@ -147,6 +147,10 @@ def emit_and_propagate(cfg: DemoConfig, vehicle: VehicleRun, folder: Path, *, pr
     from ..channel import parse_scenario, simulate_file
     from ..transmit import BeaconSchedule, payloads_from_text, write_beacon
 
+    if cfg.waveform == "janus":
+        from .janus import emit_and_propagate_janus
+
+        return emit_and_propagate_janus(cfg, vehicle, folder, progress=progress)
     folder = Path(folder)
     count = cfg.frame_count()
     schedule = BeaconSchedule(count=count, period_s=cfg.tcom_s)
@@ -175,7 +179,7 @@ class _FrameGrab:
 
 
 def receive(recording: Path, sidecar: dict, *, grab_frame: int | None = None):
-    """Measure and decode every frame of ``recording``.
+    """Measure and decode every frame (or JANUS packet: :mod:`.janus`) of ``recording``.
 
     Parameters
     ----------
@@ -196,6 +200,10 @@ def receive(recording: Path, sidecar: dict, *, grab_frame: int | None = None):
     from ..io.sidecar import sidecar_payloads
     from ..receive import Emissions, receive_file
 
+    if "janus" in sidecar:
+        from .janus import receive_janus_recording
+
+        return receive_janus_recording(recording, sidecar), None
     config = FrameConfig.from_dict(sidecar["config"])
     times = np.array([f["t_emit_s"] for f in sidecar["frames"]])
     grab = _FrameGrab(grab_frame) if grab_frame is not None else None
@@ -486,7 +494,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
     rng_imu, rng_emul = (np.random.default_rng(s) for s in np.random.SeedSequence(cfg.seed).spawn(2))
     count = cfg.frame_count()
     # the vehicle must be simulated past the last frame's reception (a frame, plus the travel time, plus margin)
-    t_end = count * cfg.tcom_s + cfg.frame_config.frame_duration_s + 2.0
+    t_end = count * cfg.tcom_s + cfg.emission_s + 2.0
     vehicle = simulate_vehicle(cfg, t_end_s=t_end, rng=rng_imu)
 
     with tempfile.TemporaryDirectory(prefix="seamodem-demo-") as tmp:
@@ -496,7 +504,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         grab_at = count // 2
         records, grabbed = receive(audio / "received.wav", sidecar, grab_frame=grab_at)
         clock["receiver"] = time.perf_counter()
-        psd = _psd(audio / "received.wav", sidecar) if plots else None
+        psd = _psd(audio / "received.wav", sidecar) if plots and cfg.waveform == "frame" else None
         array_records, array_summary = array_mission(cfg, vehicle, audio, sidecar) if cfg.array else (None, None)
         clock["array"] = time.perf_counter()
     truth = sidecar["truth"]
@@ -514,15 +522,15 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
     summary = mission_summary(cfg, vehicle, sidecar, records, errs, tracks, clock, array_summary)
 
     files = []
-    (out / "demo_config.json").write_text(json.dumps(
-        {"demo": asdict(cfg), "frame": cfg.frame_config.to_dict(),
-         "scenario": sidecar["channel"]["scenario"], "channel_noise": sidecar["channel"]["noise"]},
-        indent=1) + "\n", encoding="utf-8")
+    config_json = {"demo": asdict(cfg), "frame": cfg.frame_config.to_dict(),
+                   "scenario": sidecar["channel"]["scenario"], "channel_noise": sidecar["channel"]["noise"]}
     header = {"created_by": "seamodem demo", "recording": "received.wav",
               "sample_rate_hz": sidecar["recording"]["sample_rate_hz"],
               "sound_speed_mps": sidecar["channel"]["sound_speed_mps"], "clock_offset_s": 0.0, "turnaround_s": None,
               "decode": True, "config": cfg.frame_config.to_dict()}
-    write_measurements(out / "measurements.csv", records, header)
+    config_json, header, columns = _waveform_outputs(cfg, config_json, header, sidecar)
+    (out / "demo_config.json").write_text(json.dumps(config_json, indent=1) + "\n", encoding="utf-8")
+    write_measurements(out / "measurements.csv", records, header, **columns)
     _write_csv(out / "imu.csv", vehicle.imu)
     _write_csv(out / "truth.csv", {"t_s": vehicle.t_s, "x_m": vehicle.xy_m[:, 0], "y_m": vehicle.xy_m[:, 1]})
     for f in FILTERS:
@@ -540,10 +548,11 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
     if plots:
         plot_map(out / "map.png", cfg, vehicle, tracks, summary)
         plot_errors(out / "errors.png", tracks, errs)
-        plot_psd(out / "psd.png", psd, cfg.frame_config)
+        if psd is not None:  # frames only, as the constellation
+            plot_psd(out / "psd.png", psd, cfg.frame_config)
         if grabbed is not None:
             plot_constellation(out / "constellation.png", grabbed, cfg.frame_config, sidecar)
-        files += ["map.png", "errors.png", "psd.png", "constellation.png"]
+        files += ["map.png", "errors.png"] + ["psd.png", "constellation.png"] * (cfg.waveform == "frame")
         if images_dir is not None:
             import shutil
 
@@ -555,6 +564,16 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
     if keep_audio:
         files += ["beacon.wav", "beacon.json", "received.wav", "received.json", "vehicle_track.csv"]
     return DemoResult(cfg, summary, vehicle, errs, tracks, files)
+
+
+def _waveform_outputs(cfg: DemoConfig, config_json: dict, header: dict, sidecar: dict):
+    """demo_config.json, the measurement header and its extra columns for ``cfg.waveform`` (:mod:`.janus`)."""
+    if cfg.waveform == "janus":
+        from .janus import janus_outputs
+
+        return janus_outputs(config_json, header, sidecar)
+    del config_json["demo"]["waveform"]  # the frame demo's files as before the option
+    return config_json, header, {}
 
 
 def _write_csv(path: Path, columns: dict) -> None:

@@ -60,13 +60,16 @@ def mission_summary(cfg: DemoConfig, vehicle: VehicleRun, sidecar: dict, records
 
     count = cfg.frame_count()
     sigma_r, sigma_v = rms(errs["range_error_m"]), rms(errs["v_r_error_mps"])
-    payloads = {f["frame_index"]: f["payload_hex"] for f in sidecar["frames"]}
+    janus = cfg.waveform == "janus"  # a JANUS packet's 8 bytes stand for a frame's payload
+    payloads = {f["index"] if janus else f["frame_index"]: f["packet_hex" if janus else "payload_hex"]
+                for f in sidecar["frames"]}
     decoded = [r for r in records if r.crc_ok is not None]
     crc_ok = [r for r in decoded if r.crc_ok]
-    correct = [r for r in crc_ok if r.payload_hex == payloads.get(r.frame_index)]
+    correct = [r for r in crc_ok if (r.packet_hex if janus else r.payload_hex) == payloads.get(r.frame_index)]
     mission_end = cfg.mission_s()
     summary = {
         "created_by": f"seamodem {__version__}",
+        "waveform": "JANUS base packets, parameter set 1" if janus else f"{cfg.preset} frames",
         "mission_s": mission_end,
         "distance_m": float(np.sum(np.hypot(*np.diff(vehicle.xy_m[vehicle.t_s <= mission_end], axis=0).T))),
         "frames_emitted": count,
@@ -123,8 +126,11 @@ def format_summary(summary: dict) -> str:
     """
     s = summary
     pos = s["positioning"]
+    janus = s.get("waveform", "").startswith("JANUS")
     lines = [
         f"mission: {s['mission_s']:.0f} s, {s['distance_m']:.0f} m travelled, a frame every T_com",
+        *([f"waveform: {s['waveform']} (a frame below is a packet, its payload the packet's 8 bytes; CRLB: "
+           "the receiver's median sigma)"] if janus else []),
         f"frames: {s['frames_emitted']} emitted, {s['frames_detected']} detected, {s['frames_decoded']} decoded, "
         f"{s['crc_ok']} pass the CRC, {s['payloads_correct']} payloads equal to those sent",
     ]
