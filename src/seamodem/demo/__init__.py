@@ -7,7 +7,9 @@ The whole chain, offline, in well under a minute:
    (:mod:`seamodem.navigation.vehicle`), at Δt = 0.25 s, with its IMU/AHRS
    (heading with white noise and a drifting bias, gyro, accelerometer);
 2. **beacon** — a fixed beacon emits a jmse2024 frame every T_com
-   (:func:`seamodem.transmit.write_beacon`);
+   (:func:`seamodem.transmit.write_beacon`), or with ``waveform="janus"``
+   (``seamodem demo --waveform janus``) a JANUS packet received in step 4 by the
+   JANUS receiver (:mod:`.janus`);
 3. **channel** — the simulator (:func:`seamodem.channel.simulate_file`) makes the
    hydrophone recording along the vehicle's true track: geometry-driven Doppler
    on every path, surface and bottom echoes, spreading and absorption, white

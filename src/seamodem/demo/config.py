@@ -155,9 +155,19 @@ class DemoConfig:
         if self.waveform == "frame":
             return self.frame_config.frame_duration_s
         from ..transmit.janus import janus_waveform
-        from .janus import janus_packet
 
-        return janus_waveform(janus_packet(), self.janus_pset, JANUS_SAMPLE_RATE_HZ).x_pb.size / JANUS_SAMPLE_RATE_HZ
+        return janus_waveform(self.janus_packet(), self.janus_pset, JANUS_SAMPLE_RATE_HZ).x_pb.size / JANUS_SAMPLE_RATE_HZ
+
+    def janus_packet(self):
+        """The JANUS beacon's packet: class 16 / type 0, station 1, parameter set 1, no cargo.
+
+        Returns
+        -------
+        JanusPacket
+        """
+        from ..transmit.janus import JanusPacket
+
+        return JanusPacket.class16_app0(station_id=1, pset_id=self.janus_pset.pset_id, cargo=b"")
 
     def path(self):
         """The desired survey path.

@@ -1,8 +1,8 @@
 """The demo mission with JANUS beacons (``seamodem demo --waveform janus``): steps 2 and 4 with JANUS packets.
 
-The beacon emits a JANUS base packet (parameter set 1, class 16 / application type 0, station 1,
-no cargo) every T_com (:func:`seamodem.transmit.janus.beacon.write_janus_beacon`); the channel is
-the frame demo's (:func:`seamodem.channel.simulate_file` takes JANUS beacons); the JANUS receiver
+The beacon emits a JANUS base packet (:meth:`~.config.DemoConfig.janus_packet`: parameter set 1,
+class 16 / application type 0, station 1, no cargo) every T_com
+(:func:`seamodem.transmit.janus.beacon.write_janus_beacon`); the channel is the frame demo's (:func:`seamodem.channel.simulate_file` takes JANUS beacons); the JANUS receiver
 (:class:`seamodem.receive.janus.JanusReceiver`) writes the common measurement record, which the
 same filters read.
 """
@@ -11,57 +11,32 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .config import JANUS_SAMPLE_RATE_HZ, DemoConfig, VehicleRun
+from .config import JANUS_SAMPLE_RATE_HZ, DemoConfig
 
-__all__ = ["janus_packet", "emit_and_propagate_janus", "receive_janus_recording", "janus_outputs"]
-
-
-def janus_packet():
-    """The demo beacon's packet: class 16 / type 0, station 1, parameter set 1, no cargo.
-
-    Returns
-    -------
-    JanusPacket
-    """
-    from ..transmit.janus import JanusPacket
-
-    return JanusPacket.class16_app0(station_id=1, pset_id=1, cargo=b"")
+__all__ = ["write_janus_demo_beacon", "receive_janus_recording", "janus_outputs"]
 
 
-def emit_and_propagate_janus(cfg: DemoConfig, vehicle: VehicleRun, folder: Path, *,
-                             progress: bool | None = False) -> dict:
-    """Write ``beacon.wav`` (JANUS packets every T_com) and ``received.wav`` (the hydrophone) in ``folder``.
+def write_janus_demo_beacon(path: Path, cfg: DemoConfig, schedule) -> dict:
+    """Write the beacon: ``cfg.janus_packet()`` on ``schedule`` at 96 kHz, float samples (step 2).
 
     Parameters
     ----------
+    path : Path
+        The beacon WAV (its sidecar beside it).
     cfg : DemoConfig
         The mission (``waveform="janus"``).
-    vehicle : VehicleRun
-        The true vehicle (its track is written to ``folder``/vehicle_track.csv for the channel).
-    folder : Path
-        Where the recordings go.
-    progress : bool or None
-        Progress bar of the channel (None: when stderr is a terminal).
+    schedule : BeaconSchedule
+        A packet every T_com from 0.
 
     Returns
     -------
     dict
-        The received recording's sidecar (with the channel's ``truth`` per packet).
+        The beacon's sidecar.
     """
-    from ..channel import parse_scenario, simulate_file
-    from ..transmit import BeaconSchedule
     from ..transmit.janus.beacon import write_janus_beacon
-    from .mission import make_scenario, write_track_csv
 
-    folder = Path(folder)
-    schedule = BeaconSchedule(count=cfg.frame_count(), period_s=cfg.tcom_s)
-    write_janus_beacon(folder / "beacon.wav", [janus_packet()], cfg.janus_pset, JANUS_SAMPLE_RATE_HZ, schedule,
-                       subtype="FLOAT", command="seamodem demo --waveform janus")
-    track = folder / "vehicle_track.csv"
-    write_track_csv(track, vehicle, cfg.depth_m)
-    scenario = parse_scenario(make_scenario(cfg, track), base_dir=folder)
-    return simulate_file(folder / "beacon.wav", scenario, folder / "received.wav",
-                         command="seamodem demo --waveform janus", progress=progress)
+    return write_janus_beacon(path, [cfg.janus_packet()], cfg.janus_pset, JANUS_SAMPLE_RATE_HZ, schedule,
+                              subtype="FLOAT", command="seamodem demo --waveform janus")
 
 
 def receive_janus_recording(recording: Path, sidecar: dict) -> list:

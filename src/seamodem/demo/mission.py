@@ -147,16 +147,17 @@ def emit_and_propagate(cfg: DemoConfig, vehicle: VehicleRun, folder: Path, *, pr
     from ..channel import parse_scenario, simulate_file
     from ..transmit import BeaconSchedule, payloads_from_text, write_beacon
 
-    if cfg.waveform == "janus":
-        from .janus import emit_and_propagate_janus
-
-        return emit_and_propagate_janus(cfg, vehicle, folder, progress=progress)
     folder = Path(folder)
     count = cfg.frame_count()
     schedule = BeaconSchedule(count=count, period_s=cfg.tcom_s)
-    payloads = payloads_from_text("seamodem demo frame {index}", count)
-    write_beacon(folder / "beacon.wav", cfg.frame_config, schedule, payloads, command="seamodem demo",
-                 progress=progress)
+    if cfg.waveform == "janus":
+        from .janus import write_janus_demo_beacon
+
+        write_janus_demo_beacon(folder / "beacon.wav", cfg, schedule)
+    else:
+        payloads = payloads_from_text("seamodem demo frame {index}", count)
+        write_beacon(folder / "beacon.wav", cfg.frame_config, schedule, payloads, command="seamodem demo",
+                     progress=progress)
     track = folder / "vehicle_track.csv"
     write_track_csv(track, vehicle, cfg.depth_m)
     scenario = parse_scenario(make_scenario(cfg, track), base_dir=folder)
