@@ -133,6 +133,12 @@ ELSEWHERE = {
     "seamodem channel janus_beacon.wav --scenario examples/scenarios/straight_line.toml -o janus_received.wav":
         "tests/cli/test_janus_docs.py",
     "seamodem rx --janus janus_received.wav -o janus_received.csv": "tests/cli/test_janus_docs.py",
+    "seamodem demo --waveform janus --keep-audio -o demo_janus":
+        "tests/cli/test_demo_janus.py runs it with --duration 21 (the whole survey: 151 s of 96 kHz audio)",
+    "seamodem rx --janus demo_janus/received.wav -o demo_janus/rx.csv":
+        "tests/cli/test_demo_janus.py (rx --janus on the 21 s JANUS demo's recording)",
+    "seamodem nav track demo_janus/rx.csv --imu demo_janus/imu.csv --beacon 45,-25 --start 0,0 --start-speed 1 "
+    "--truth demo_janus/truth.csv -o demo_janus/track.csv": "tests/cli/test_demo_janus.py (the same, on its files)",
     "seamodem rx RECORDING.wav [--config SIDECAR.json] -o MEAS.csv": "a synopsis (placeholders)",
     "seamodem nav track meas.csv --imu imu.csv --beacon 45,-25 --start 0,0 --depth 5 25 --sound-speed-profile "
     "examples/water/thermocline_svp.csv -o track.csv":
