@@ -11,8 +11,8 @@ import numpy as np
 from ..config import FrameConfig, get_preset
 from ..errors import ConfigError
 
-__all__ = ["FILTERS", "FILTER_LABELS", "FILTER_COLOURS", "WAVEFORMS", "JANUS_SAMPLE_RATE_HZ", "DemoConfig", "VehicleRun",
-           "receiver_settings"]
+__all__ = ["FILTERS", "FILTER_LABELS", "FILTER_COLOURS", "WAVEFORMS", "JANUS_SAMPLE_RATE_HZ", "DemoConfig",
+           "VehicleRun", "receiver_settings"]
 
 #: What the demo's beacon emits: the preset's frames, or JANUS packets (parameter set 1; :mod:`.janus`).
 WAVEFORMS = ("frame", "janus")
@@ -156,7 +156,8 @@ class DemoConfig:
             return self.frame_config.frame_duration_s
         from ..transmit.janus import janus_waveform
 
-        return janus_waveform(self.janus_packet(), self.janus_pset, JANUS_SAMPLE_RATE_HZ).x_pb.size / JANUS_SAMPLE_RATE_HZ
+        wave = janus_waveform(self.janus_packet(), self.janus_pset, JANUS_SAMPLE_RATE_HZ)
+        return wave.x_pb.size / JANUS_SAMPLE_RATE_HZ
 
     def janus_packet(self):
         """The JANUS beacon's packet: class 16 / type 0, station 1, parameter set 1, no cargo.

@@ -2,7 +2,8 @@
 
 The beacon emits a JANUS base packet (:meth:`~.config.DemoConfig.janus_packet`: parameter set 1,
 class 16 / application type 0, station 1, no cargo) every T_com
-(:func:`seamodem.transmit.janus.beacon.write_janus_beacon`); the channel is the frame demo's (:func:`seamodem.channel.simulate_file` takes JANUS beacons); the JANUS receiver
+(:func:`seamodem.transmit.janus.beacon.write_janus_beacon`); the channel is the frame demo's
+(:func:`seamodem.channel.simulate_file` takes JANUS beacons); the JANUS receiver
 (:class:`seamodem.receive.janus.JanusReceiver`) writes the common measurement record, which the
 same filters read.
 """

@@ -126,7 +126,7 @@ def write_track_csv(path: Path, vehicle: VehicleRun, depth_m: float) -> None:
 
 
 def emit_and_propagate(cfg: DemoConfig, vehicle: VehicleRun, folder: Path, *, progress: bool | None = False) -> dict:
-    """Write ``beacon.wav`` (the frames, or JANUS packets: :mod:`.janus`) and ``received.wav`` (the hydrophone) in ``folder``.
+    """Write ``beacon.wav`` (frames, or JANUS packets: :mod:`.janus`) and ``received.wav`` in ``folder``.
 
     Parameters
     ----------
