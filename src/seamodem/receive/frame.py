@@ -566,6 +566,8 @@ class FrameMeasurer:
         sigma_tone = math.hypot(sigma_tone, m.tone.spread_hz * c / self.config.tone_hz)
         # and a fading tone (or one beating with a merged echo): its log-amplitude rate, the same scale as
         # its phase's wander (as the whole-frame fit's term)
+        # (the two-carrier check below models that wander as the data band's too: not noise to it)
+        sigma_tone_lines = sigma_tone
         sigma_tone = math.hypot(sigma_tone, m.tone.amp_rate_hz * c / (2 * math.pi * self.config.tone_hz))
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
@@ -612,7 +614,7 @@ class FrameMeasurer:
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
             # (a fit on decisions has the tone as its referee already, above)
-            sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone, sigma, self.config) \
+            sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone_lines, sigma, self.config) \
                 if source == "whole_frame" else 0.0
             sigma = math.hypot(sigma, sigma_2c)
             # a phase-rate error is a time-scale error of the symbol instants too (as in unmodelled_sigmas)
