@@ -209,6 +209,8 @@ FIELDS = tuple(f.name for f in dataclasses.fields(MeasurementRecord))
 CORE_FIELDS = ("frame_index", "t_emit_s", "t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db", "v_r_tone_eq9_mps",
                "v_r_bank_mps", "detection_z", "detection_rho", "sigma_range_m", "sigma_v_r_mps",
                "sigma_v_r_bank_mps", "tone_c_n0_dbhz")
+#: what a file must have to be read (SPEC §4; ``seamodem nav track`` requires the same): the others are NaN if absent
+REQUIRED_FIELDS = CORE_FIELDS[:7]
 #: ... and the others, which a file may lack (measured without decoding, or written before the column existed)
 OPTIONAL_FIELDS = tuple(f for f in FIELDS if f not in CORE_FIELDS)
 _TYPES = {f.name: f.type for f in dataclasses.fields(MeasurementRecord)}
@@ -418,7 +420,8 @@ def read_measurements(path: str | Path) -> Measurements:
     ------
     InputFileError
         Missing file, unknown format, a sidecar that is not JSON or of another
-        format, a row with missing columns or a value that is not a number.
+        format, a row without one of :data:`REQUIRED_FIELDS` (SPEC §4's seven; the
+        other columns may be absent: NaN or their default) or a value that is not a number.
 
     Warns
     -----
@@ -445,10 +448,10 @@ def read_measurements(path: str | Path) -> Measurements:
         raise InputFileError(f"{path} is not a seamodem measurement file ({MEASUREMENT_FORMAT_V1!r} header expected)")
     records = []
     for i, row in enumerate(rows):
-        missing = [k for k in FIELDS if k not in row and k not in OPTIONAL_FIELDS]
+        missing = [k for k in REQUIRED_FIELDS if k not in row]
         if missing:
             raise InputFileError(f"{path}: row {i + 1} lacks {', '.join(missing)}")
-        values = {}
+        values = {k: math.nan for k in CORE_FIELDS}  # a table of the required columns only (SPEC §4)
         for k in FIELDS:
             if k in row:
                 try:
