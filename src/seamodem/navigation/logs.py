@@ -125,13 +125,17 @@ def _jsonl_table(text: str, path: Path, what: str):
     return header, [[_jsonl_cell(obj.get(k)) for k in header] for obj in objects], []
 
 
+#: a boolean cell (``crc_ok``) as a number
+_BOOLEANS = {"true": 1.0, "false": 0.0}
+
+
 def _float_column(rows, i: int, column: str, path, what: str) -> np.ndarray:
     """Column ``i`` as floats; an empty or missing cell is NaN, text that is not a number an error."""
     out = np.empty(len(rows))
     for r, row in enumerate(rows):
         cell = row[i].strip() if i < len(row) else ""
         try:
-            out[r] = float(cell) if cell else math.nan
+            out[r] = _BOOLEANS.get(cell.lower(), math.nan) if cell.lower() in _BOOLEANS or not cell else float(cell)
         except ValueError:
             raise InputFileError(f"{what} {path}: data row {r + 1}, column {column}: not a number ({cell!r})") from None
     return out
@@ -325,7 +329,7 @@ def read_measurements(path, *, what: str = "measurement file") -> dict[str, np.n
         CSV or JSON Lines (what any ``seamodem rx`` mode writes) with the columns ``frame_index, t_emit_s, t_arrival_s, tof_s, range_m,
         v_r_mps, snr_db`` (SI units, SPEC §1); optional ``sigma_range_m`` [m] and
         ``sigma_v_r_mps`` [m/s] (also accepted as ``range_std_m``,
-        ``v_r_std_mps``), ``crc_ok`` (1, 0 or empty), ``status`` (text) and, from a
+        ``v_r_std_mps``), ``crc_ok`` (true, false, 1, 0 or empty), ``status`` (text) and, from a
         hydrophone array (``seamodem rx --array``), ``azimuth_body_rad`` and
         ``sigma_azimuth_body_rad`` (empty where a frame has none). Other
         columns (``payload_text``...) are ignored. Metadata comment lines before

@@ -247,10 +247,17 @@ def _json_value(value):
 
 
 def _csv_row(rec: MeasurementRecord) -> dict[str, Any]:
-    row = rec.to_dict()
-    row["crc_ok"] = "" if rec.crc_ok is None else int(rec.crc_ok)
-    row["two_way"] = int(rec.two_way)
-    return {k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()}
+    from ..io.tables import csv_cell
+
+    return {k: csv_cell(v) for k, v in rec.to_dict().items()}
+
+
+def _schema(records_type, fields: Sequence[str]) -> dict[str, Any]:
+    """The sidecar's ``schema``: the null token and each column's name, type and unit."""
+    from ..io.tables import NULL_TOKEN, table_schema
+
+    annotations = {f.name: str(f.type) for f in dataclasses.fields(records_type)}
+    return {"null": NULL_TOKEN, "columns": table_schema(fields, annotations)}
 
 
 def write_measurements(
@@ -289,14 +296,17 @@ def write_measurements(
     (:func:`seamodem.io.files.atomic_outputs`).
 
     CSV: one header row, then one row per record; floats as Python's
-    ``repr`` (shortest round-trip text, ``nan`` when unknown); ``crc_ok`` 1, 0
-    or empty (not decoded); text quoted when it holds a comma, a quote or a
-    line break. JSON Lines: one object per record, ``null`` when unknown.
+    ``repr`` (shortest round-trip text); booleans ``true``/``false``; an
+    unknown value (NaN, ``crc_ok`` of a frame not decoded) is the one null
+    token, an empty cell; text quoted when it holds a comma, a quote or a line
+    break. JSON Lines: one object per record, ``null`` when unknown. The
+    sidecar's ``schema`` gives every column's type and unit
+    (:mod:`seamodem.io.tables`, which also reads the files with pandas or polars).
     """
     path = Path(path)
     kind = kind or _format(path)
     sidecar = measurement_sidecar_path(path)
-    n, unmatched = 0, []
+    n, unmatched, record_type = 0, [], MeasurementRecord
     with atomic_outputs(path, sidecar) as (tmp, tmp_sidecar):
         with tmp.open("w", encoding="utf-8", newline="") as f:
             writer = None
@@ -304,6 +314,7 @@ def write_measurements(
                 writer = csv.DictWriter(f, fieldnames=fields)
                 writer.writeheader()
             for rec in records:
+                record_type = type(rec)
                 if not keep_unmatched and not is_matched(rec):
                     unmatched.append(rec.t_arrival_s)
                     continue
@@ -314,7 +325,7 @@ def write_measurements(
                 f.flush()
                 n += 1
         meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **header, "columns": list(fields), "rows": n,
-                "unmatched_arrivals_s": unmatched}
+                "unmatched_arrivals_s": unmatched, "schema": _schema(record_type, fields)}
         tmp_sidecar.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return n
 
