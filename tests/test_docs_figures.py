@@ -72,3 +72,34 @@ def test_channel_md_says_which_tables_are_required():
                                    if table == "beacon" else {"beacon": {}})})
         row = next(line for line in page.splitlines() if line.startswith(f"| `[{table}]`"))
         assert f"required in {mode} mode" in row, row
+
+
+@pytest.mark.slow
+def test_guide_demo_output_is_what_the_demo_prints(tmp_path, monkeypatch, capsys):
+    """The demo's output in guide.md (and the figures README.md and performance.md take from it) is today's.
+
+    The stale CRLBs (0.07 cm, 0.055 cm/s where the demo prints 0.08 and 0.070) and the batch smoother's
+    0.21 m (item 7) were in these pages. The whole default demo runs here (about 10 s, no figures).
+    """
+    import json
+
+    from seamodem.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo", "--no-plots", "-o", "d"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    guide = (DOCS / "guide.md").read_text(encoding="utf-8")
+    block = guide[guide.index("Output (default mission, seed 1"):guide.index("What this shows:")]
+    for start in ("frames:", "in-band SNR", "range vs truth", "v_r vs truth", "  from the decoded frames",
+                  "  emulated (geometry"):
+        line = next(p for p in printed if p.startswith(start))
+        assert line in block.splitlines(), f"guide.md's demo output is out of date: {line!r}"
+    summary = json.loads((tmp_path / "d" / "summary.json").read_text())
+    mean = {f: round(v["mean_error_m"], 2) for f, v in summary["positioning"]["waveform"].items()}
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert (f"to {mean['inertial']:.2f} m mean error and its batch smoother to {mean['batch']:.2f} m; paper 000's "
+            f"EKF, for comparison, {mean['proposed']:.2f} m (ROSB {mean['rosb']:.2f} m)") in " ".join(readme.split())
+    performance = (DOCS / "performance.md").read_text(encoding="utf-8")
+    assert f"| positioning, batch smoother (mean error) | {mean['batch']:.2f} m |" in performance
+    assert f"median delay CRLB {100 * summary['range_crlb_median_m']:.3f} cm" in performance
+    assert f"median CRLB {100 * summary['v_r_crlb_median_mps']:.3f} cm/s" in performance
