@@ -102,3 +102,13 @@ def test_a_missing_column_message_lists_names_not_a_record(tmp_path):
     with pytest.raises(InputFileError) as exc:
         logs.read_measurements(wide)
     assert "and 28 more" in str(exc.value) and len(str(exc.value)) < 400
+
+
+def test_a_cell_of_junk_is_quoted_short(tmp_path):
+    """Item 4, the other way a file's contents reached the terminal: a non-numeric cell quoted whole."""
+    junk = tmp_path / "junk.csv"
+    junk.write_text("frame_index,t_emit_s,t_arrival_s,tof_s,range_m,v_r_mps,snr_db\n"
+                    f"0,0,0.2,0.2,{'x' * 2000},1,10\n")
+    with pytest.raises(InputFileError) as exc:
+        logs.read_measurements(junk)
+    assert "column range_m: not a number" in str(exc.value) and len(str(exc.value)) < 200

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, InputFileError
+from ..errors import ConfigError, InputFileError, value_text
 from .geometry import check_lat_lon, geodetic_to_local
 
 __all__ = [
@@ -137,7 +137,7 @@ def _float_column(rows, i: int, column: str, path, what: str) -> np.ndarray:
         try:
             out[r] = _BOOLEANS.get(cell.lower(), math.nan) if cell.lower() in _BOOLEANS or not cell else float(cell)
         except ValueError:
-            raise InputFileError(f"{what} {path}: data row {r + 1}, column {column}: not a number ({cell!r})") from None
+            raise InputFileError(f"{what} {path}: data row {r + 1}, column {column}: not a number ({value_text(cell)})") from None
     return out
 
 
