@@ -1,8 +1,9 @@
-"""Issue 29 item 11: in the demo's figures no curve hides under another and no legend covers the data."""
+"""Issue 29 item 11: in the demo's and nav's figures no curve hides under another and no legend covers the data."""
 
 from __future__ import annotations
 
 import itertools
+import re
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ from matplotlib.colors import to_rgba
 from scipy.spatial import cKDTree
 
 import seamodem.demo.figures as demo_figures
+import seamodem.navigation.figures as nav_figures
 from seamodem.cli import main
 
 
@@ -46,22 +48,33 @@ def legend_overlaps_axes(ax) -> bool:
     return legend is not None and legend.get_window_extent(renderer).overlaps(ax.get_window_extent(renderer))
 
 
+FIGURES = ["map.png", "errors.png", "psd.png", "fig7_top_view.png", "fig8_error.png", "track.png"]
+
+
 @pytest.fixture(scope="module")
 def demo_figures_drawn(tmp_path_factory):
-    """The figures of a 60 s demo, kept open instead of saved."""
+    """The figures of a 60 s demo, of nav track on its files and of a small nav simulate, kept open, not saved."""
     kept = {}
-    original = demo_figures.save_figure
-    demo_figures.save_figure = lambda fig, path, **_: kept.__setitem__(Path(path).name, fig)
+    def keep(fig, path, **_):  # nav track draws into its outputs' temporary files, .track.png.*.part
+        kept[re.sub(r"^\.(.+?\.png)\..*\.part$", r"\1", Path(path).name)] = fig
+
+    originals = demo_figures.save_figure, nav_figures.save_figure
+    demo_figures.save_figure = nav_figures.save_figure = keep
+    d = tmp_path_factory.mktemp("figures")
     try:
-        assert main(["demo", "--duration", "60", "-q", "-o", str(tmp_path_factory.mktemp("demo") / "d")]) == 0
+        assert main(["demo", "--duration", "60", "-q", "-o", str(d / "d")]) == 0
+        assert main(["nav", "track", str(d / "d" / "measurements.csv"), "--imu", str(d / "d" / "imu.csv"),
+                     "--beacon", "45,-25", "--start", "0,0", "--start-speed", "1", "--truth",
+                     str(d / "d" / "truth.csv"), "-o", str(d / "track.csv")]) == 0
+        assert main(["nav", "simulate", "--tcom", "3", "6", "--runs", "4", "-q", "-o", str(d / "sim")]) == 0
     finally:
-        demo_figures.save_figure = original
+        demo_figures.save_figure, nav_figures.save_figure = originals
     for fig in kept.values():
         fig.canvas.draw()
     return kept
 
 
-@pytest.mark.parametrize("name", ["map.png", "errors.png"])
+@pytest.mark.parametrize("name", FIGURES)
 def test_no_curve_hides_under_another(demo_figures_drawn, name):
     """The emulated tracks (dotted, same colour) were drawn on the decoded ones and could not be seen."""
     fig = demo_figures_drawn[name]
@@ -69,7 +82,7 @@ def test_no_curve_hides_under_another(demo_figures_drawn, name):
         assert hidden_lines(ax) == [], (name, ax.get_title())
 
 
-@pytest.mark.parametrize("name", ["map.png", "errors.png"])
+@pytest.mark.parametrize("name", FIGURES)
 def test_legends_are_outside_the_data(demo_figures_drawn, name):
     fig = demo_figures_drawn[name]
     assert any(ax.get_legend() for ax in fig.axes)

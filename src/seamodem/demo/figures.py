@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import FrameConfig
-from ..plots import pyplot, save_figure
+from ..plots import legend_outside, pyplot, save_figure
 from .config import FILTER_COLOURS, FILTER_LABELS, FILTERS, DemoConfig, VehicleRun, receiver_settings
 
 __all__ = ["plot_map", "plot_errors", "plot_psd", "plot_constellation"]
@@ -20,10 +20,6 @@ MAP_STYLES = {"inertial": {"lw": 2.2, "ls": "-"}, "batch": {"lw": 1.2, "ls": (0,
 def _figure(*args, **kwargs):
     return pyplot().subplots(*args, **kwargs)
 
-
-def _legend_outside(ax) -> None:
-    """The legend to the right of the axes, off the data."""
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=8)
 
 
 def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: dict) -> None:
@@ -64,7 +60,7 @@ def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: 
            title=f"seamodem demo: positioned from {summary['frames_detected']} received frames "
                  f"({summary['payloads_correct']} payloads decoded)")
     ax.grid(alpha=0.3)
-    _legend_outside(ax)
+    legend_outside(ax, fontsize=8)
     save_figure(fig, path, dpi=110)
 
 
@@ -93,7 +89,7 @@ def plot_errors(path, tracks: dict, errs: dict) -> None:
             ax.plot(tr["t_s"], tr["error_m"], color=FILTER_COLOURS[f], solid_capstyle="butt", **style,
                     label=f"{FILTER_LABELS[f]}, {'decoded frames' if source == 'waveform' else 'emulated measurements'}")
     ax.set(xlabel="time [s]", ylabel="position error [m]", title="positioning error")
-    _legend_outside(ax)
+    legend_outside(ax, fontsize=8)
     axes[1].plot(errs["t_arrival_s"], 100 * errs["range_error_m"], "o", ms=3)
     axes[1].set(xlabel="arrival time [s]", ylabel="range error [cm]", title="receiver range − truth (direct path)")
     axes[2].plot(errs["t_arrival_s"], 100 * errs["v_r_error_mps"], "o", ms=3, color="C1")
@@ -120,7 +116,7 @@ def plot_psd(path, psd, config: FrameConfig) -> None:
     None
     """
     f, pxx = psd
-    fig, ax = _figure(figsize=(8, 4), constrained_layout=True)
+    fig, ax = _figure(figsize=(10, 4), constrained_layout=True)
     ax.plot(f / 1e3, 10 * np.log10(np.maximum(pxx / np.max(pxx), 1e-20)), lw=0.8)
     lo, hi = config.data_band_hz
     ax.axvspan(lo / 1e3, hi / 1e3, color="C1", alpha=0.15, label=f"data band {lo / 1e3:g}–{hi / 1e3:g} kHz")
@@ -128,7 +124,7 @@ def plot_psd(path, psd, config: FrameConfig) -> None:
     ax.set(xlabel="frequency [kHz]", ylabel="PSD [dB rel. max]", ylim=(-80, 5),
            title="received: the first frame (direct, surface and bottom paths, noise)")
     ax.grid(alpha=0.3)
-    ax.legend()
+    legend_outside(ax, fontsize=8)
     save_figure(fig, path, dpi=110)
 
 
