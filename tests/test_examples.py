@@ -111,4 +111,9 @@ def test_monte_carlo(tmp_path):
     assert by[(3.0, "proposed")] < by[(3.0, "rosb")] and by[(12.0, "proposed")] < by[(12.0, "rosb")]
     # the inertial filter (IMU as input, heading bias estimated) beats paper 000's EKF on the same runs
     assert by[(3.0, "inertial")] < by[(3.0, "proposed")] and by[(12.0, "inertial")] < by[(12.0, "proposed")]
-    assert "Table 3" in (out / "table.txt").read_text()
+    text = (out / "table.txt").read_text()
+    assert "Table 3" in text
+    # issue 29 item 6: the 12 s row printed UNSTABLE for all four filters; each mean is stated, diverged runs counted
+    assert "UNSTABLE" not in text
+    for r in rows:
+        assert f"{float(r['mean_error_m']):.3f} ({int(r['outliers']):>3}, {int(r['diverged']):>2})" in text, r

@@ -9,7 +9,7 @@ import numpy as np
 from .config import FrameConfig
 from .errors import SeamodemError
 
-__all__ = ["plot_recording", "plot_recording_blocks", "envelope", "save_figure", "pyplot"]
+__all__ = ["plot_recording", "plot_recording_blocks", "envelope", "save_figure", "pyplot", "legend_outside"]
 
 
 def pyplot():
@@ -29,6 +29,11 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def legend_outside(ax, **kwargs) -> None:
+    """The axes' legend to the right of them, off the data (``kwargs`` go to ``ax.legend``, e.g. ``fontsize``)."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kwargs)
 
 
 def save_figure(fig, path: str | Path, *, dpi: int = 100) -> None:

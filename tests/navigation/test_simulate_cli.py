@@ -55,7 +55,24 @@ def test_unstable_rows_are_flagged_not_presented(tmp_path, capsys):
     rows = {r["filter"]: r for r in _rows(tmp_path / "u")}
     assert int(rows["proposed"]["diverged"]) > 0 and rows["inertial"]["diverged"] == "0"
     out = capsys.readouterr().out
-    assert re.search(r"UNSTABLE +\d+/8", out) and "not results" in out
+    # every run diverged and none is an IQR outlier: the mean holds them, is marked '!' and said not to be a result
+    assert re.search(rf"{float(rows['proposed']['mean_error_m']):.3f} \(  0,  8\)!", out)
+    assert "8 are inside the means marked '!': those means are not results" in out
+
+
+def test_paper_table_states_its_means_with_the_diverged_runs_beside_them(tmp_path, capsys):
+    """Issue 29 item 6: --paper printed UNSTABLE in every row; the means were only in table.csv."""
+    assert main(["nav", "simulate", "--paper", "--tcom", "3", "12", "--runs", "20", "--seed", "0", "-q",
+                 "-o", str(tmp_path / "p")]) == 0
+    out = capsys.readouterr().out
+    rows = _rows(tmp_path / "p")
+    assert sum(int(r["diverged"]) for r in rows) > 0  # the case the issue met
+    assert "UNSTABLE" not in out
+    for r in rows:  # each row's mean, outliers and diverged runs as table.csv has them
+        cell = f"{float(r['mean_error_m']):.3f} ({int(r['outliers']):>3}, {int(r['diverged']):>2})"
+        assert out.count(cell) >= 1, (cell, out)
+    assert "diverged = runs whose error exceeded 50 m at some time (the filter lost the vehicle)" in out
+    assert "are among the outliers, outside the means" in out and "'!'" not in out
 
 
 def test_paper_noise_and_array_bearing_options(tmp_path, capsys, short_path):

@@ -29,6 +29,11 @@ before: ``snr_db`` moved by ≤ 7.5e-5 (relative), ``tone_c_n0_dbhz`` ≤ 1.1e-5
 the tone ML (``v_r_mps`` here) ≤ 1.2e-7, eq 9 ≤ 1.3e-8, ``eq_snr_db`` ≤ 3e-8,
 ``detection_z``/``detection_rho`` ≤ 0.4 % (the noise median's sample);
 ``v_r_bank_mps``, CRC, payloads, passes and BER digit for digit.
+
+Issue 29 changed the file's notation on purpose, not its numbers: booleans are
+``true``/``false`` (``two_way`` was 0/1, ``crc_ok`` 1/0) and an unknown value is
+the one null token, an empty cell (a float was ``nan``). The golden rows were
+rewritten by that mapping alone.
 """
 
 import csv

@@ -7,7 +7,6 @@ with exit code 2; no traceback (set SEAMODEM_DEBUG=1 to see one).
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import os
 import sys
@@ -21,8 +20,10 @@ __all__ = ["main", "COMMANDS"]
 COMMANDS = ("demo", "tx", "channel", "rx", "ber", "plot", "config", "nav")
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def _parser():
+    from ._parsing import SeamodemParser
+
+    parser = SeamodemParser(
         prog="seamodem",
         description="Underwater acoustic modem toolkit: communicate and navigate with the same signal.",
     )

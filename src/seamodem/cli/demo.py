@@ -33,9 +33,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=1, help="seed of the IMU, channel and emulation noise (default 1)")
     p.add_argument("--keep-audio", action="store_true",
                    help="keep beacon.wav, received.wav and their sidecars in DIR (about 90 MB)")
-    p.add_argument("--array", metavar="SPEC",
+    p.add_argument("--array", metavar="SPEC", nargs="?", const="tetra:0.08",
                    help="also record the beacon with a hydrophone array on the vehicle (tetra[:APERTURE_M], circleN, "
-                        "lineN or a TOML/JSON file, as seamodem channel --array) and compare it with one hydrophone: "
+                        "lineN or a TOML/JSON file, as seamodem channel --array; --array alone: tetra:0.08, the array of docs/array.md) and compare it with one hydrophone: "
                         "frames, FER, bearing error, one-frame fix (DIR/measurements_array.csv; docs/array.md)")
     p.add_argument("--waveform", choices=("frame", "janus"), default="frame",
                    help="what the beacon emits: jmse2024 frames (default) or JANUS packets, parameter set 1, "

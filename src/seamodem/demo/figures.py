@@ -5,14 +5,21 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import FrameConfig
-from ..plots import pyplot, save_figure
+from ..plots import legend_outside, pyplot, save_figure
 from .config import FILTER_COLOURS, FILTER_LABELS, FILTERS, DemoConfig, VehicleRun, receiver_settings
 
 __all__ = ["plot_map", "plot_errors", "plot_psd", "plot_constellation"]
 
 
+#: the map's line per filter: widths decrease in drawing order and the later ones are dashed, so a track
+#: a few centimetres from another is seen beside it, not under it
+MAP_STYLES = {"inertial": {"lw": 2.2, "ls": "-"}, "batch": {"lw": 1.2, "ls": (0, (4, 2))},
+              "proposed": {"lw": 1.2, "ls": "--"}, "rosb": {"lw": 1.2, "ls": "-."}}
+
+
 def _figure(*args, **kwargs):
     return pyplot().subplots(*args, **kwargs)
+
 
 
 def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: dict) -> None:
@@ -35,16 +42,17 @@ def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: 
     -------
     None
     """
-    fig, ax = _figure(figsize=(7, 6), constrained_layout=True)
+    fig, ax = _figure(figsize=(9.5, 6), constrained_layout=True)
     end = vehicle.t_s <= summary["mission_s"]
     plan = cfg.path().sample(np.linspace(0, cfg.path().duration_s, 600)).position
-    ax.plot(plan[:, 0], plan[:, 1], color="0.75", lw=3, label="survey plan")
-    ax.plot(*vehicle.xy_m[end].T, color="k", lw=1.5, label="true track")
+    ax.plot(plan[:, 0], plan[:, 1], color="0.75", lw=6, label="survey plan")
+    # widest first, so each track stays visible around the narrower ones drawn over it (they differ by cm)
+    ax.plot(*vehicle.xy_m[end].T, color="k", lw=3.5, label="true track")
     pos = summary["positioning"]["waveform"]
     for f in FILTERS:
         tr = tracks[("waveform", f)]
         keep = tr["t_s"] <= summary["mission_s"]
-        ax.plot(*tr["xy_m"][keep].T, color=FILTER_COLOURS[f], lw=1.2, ls="-" if f in ("inertial", "batch") else "--",
+        ax.plot(*tr["xy_m"][keep].T, color=FILTER_COLOURS[f], **MAP_STYLES[f],
                 label=f"{FILTER_LABELS[f]}: mean error {pos[f]['mean_error_m']:.2f} m")
     ax.plot(*cfg.beacon_xy_m, marker="^", color="C2", ms=12, ls="none", label="beacon")
     ax.plot(*vehicle.xy_m[0], marker="o", color="k", ms=6, ls="none", label="start (GNSS fix)")
@@ -52,7 +60,7 @@ def plot_map(path, cfg: DemoConfig, vehicle: VehicleRun, tracks: dict, summary: 
            title=f"seamodem demo: positioned from {summary['frames_detected']} received frames "
                  f"({summary['payloads_correct']} payloads decoded)")
     ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
+    legend_outside(ax, fontsize=8)
     save_figure(fig, path, dpi=110)
 
 
@@ -72,15 +80,16 @@ def plot_errors(path, tracks: dict, errs: dict) -> None:
     -------
     None
     """
-    fig, axes = _figure(3, 1, figsize=(9, 9), constrained_layout=True)
+    fig, axes = _figure(3, 1, figsize=(11, 9), constrained_layout=True)
     ax = axes[0]
     for f in FILTERS:
-        for source, ls in (("waveform", "-"), ("emulated", ":")):
+        # the two sources give nearly the same curve: the emulated one as a wide pale band under the decoded one
+        for source, style in (("emulated", {"lw": 5.0, "alpha": 0.3}), ("waveform", {"lw": 1.0})):
             tr = tracks[(source, f)]
-            ax.plot(tr["t_s"], tr["error_m"], color=FILTER_COLOURS[f], ls=ls, lw=1.0,
+            ax.plot(tr["t_s"], tr["error_m"], color=FILTER_COLOURS[f], solid_capstyle="butt", **style,
                     label=f"{FILTER_LABELS[f]}, {'decoded frames' if source == 'waveform' else 'emulated measurements'}")
     ax.set(xlabel="time [s]", ylabel="position error [m]", title="positioning error")
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     axes[1].plot(errs["t_arrival_s"], 100 * errs["range_error_m"], "o", ms=3)
     axes[1].set(xlabel="arrival time [s]", ylabel="range error [cm]", title="receiver range − truth (direct path)")
     axes[2].plot(errs["t_arrival_s"], 100 * errs["v_r_error_mps"], "o", ms=3, color="C1")
@@ -107,7 +116,7 @@ def plot_psd(path, psd, config: FrameConfig) -> None:
     None
     """
     f, pxx = psd
-    fig, ax = _figure(figsize=(8, 4), constrained_layout=True)
+    fig, ax = _figure(figsize=(10, 4), constrained_layout=True)
     ax.plot(f / 1e3, 10 * np.log10(np.maximum(pxx / np.max(pxx), 1e-20)), lw=0.8)
     lo, hi = config.data_band_hz
     ax.axvspan(lo / 1e3, hi / 1e3, color="C1", alpha=0.15, label=f"data band {lo / 1e3:g}–{hi / 1e3:g} kHz")
@@ -115,7 +124,7 @@ def plot_psd(path, psd, config: FrameConfig) -> None:
     ax.set(xlabel="frequency [kHz]", ylabel="PSD [dB rel. max]", ylim=(-80, 5),
            title="received: the first frame (direct, surface and bottom paths, noise)")
     ax.grid(alpha=0.3)
-    ax.legend()
+    legend_outside(ax, fontsize=8)
     save_figure(fig, path, dpi=110)
 
 

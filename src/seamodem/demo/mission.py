@@ -253,9 +253,11 @@ def records_to_columns(records) -> dict[str, np.ndarray]:
     -------
     dict of ndarray
         ``frame_index``, ``t_emit_s``, ``t_arrival_s``, ``tof_s`` [s], ``range_m`` [m], ``v_r_mps`` [m/s],
-        ``snr_db`` [dB].
+        ``snr_db`` [dB], and the records' ``sigma_range_m`` [m] and ``sigma_v_r_mps`` [m/s]: the filters
+        weight each frame by them as ``seamodem nav track`` does on the demo's measurements.csv.
     """
-    names = ("frame_index", "t_emit_s", "t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db")
+    names = ("frame_index", "t_emit_s", "t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db", "sigma_range_m",
+             "sigma_v_r_mps")
     return {n: np.array([getattr(r, n) for r in records], dtype=float) for n in names}
 
 
@@ -292,6 +294,8 @@ def emulate_measurements(truth: list[dict], frame_index, *, sigma_range_m: float
         "range_m": np.array([r["range_true_m"] for r in rows]) + sigma_range_m * rng.standard_normal(n),
         "v_r_mps": np.array([r["v_r_true_mps"] for r in rows]) + sigma_v_r_mps * rng.standard_normal(n),
         "snr_db": np.array([r["snr_db"] for r in rows]),
+        "sigma_range_m": np.full(n, sigma_range_m),  # the noise drawn, as a record states its own
+        "sigma_v_r_mps": np.full(n, sigma_v_r_mps),
     }
 
 

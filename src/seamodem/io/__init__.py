@@ -1,4 +1,5 @@
-"""File input and output: recordings (files and streams, one source interface), JSON sidecars, atomic writes.
+"""File input and output: recordings (files and streams, one source interface), JSON sidecars, atomic writes,
+the tables seamodem writes read with stable types.
 
 Names are imported on first use, so that ``seamodem.io.files`` alone does not
 bring in numpy or soundfile.
@@ -14,6 +15,7 @@ _EXPORTS = exports(
         "source": ("BLOCK", "BlockStats", "RecordingSource", "open_recording", "read_recording"),
         "stream": ("StreamSource", "open_stream"),
         "blocks": ("read_blocks",),
+        "tables": ("read_table", "table_schema"),
     }
 )
 __all__ = list(_EXPORTS)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..plots import pyplot, save_figure
+from ..plots import legend_outside, pyplot, save_figure
 
 __all__ = ["plot_top_view", "plot_error_curves", "plot_track", "error_ellipses"]
 
@@ -31,7 +31,7 @@ def plot_top_view(result, path: str | Path, *, filter: str | None = None, n_tcom
     """
     filter = filter or _filters_run(result)[0]
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5, 7))
+    fig, ax = plt.subplots(figsize=(8, 7))
     planned = result.config.reference()[0][:, :2]
     ax.plot(*planned.T, color="0.6", lw=3, alpha=0.6, label="planned path")
     truth = np.asarray(result.truth_track, dtype=float)
@@ -57,7 +57,7 @@ def plot_top_view(result, path: str | Path, *, filter: str | None = None, n_tcom
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
-    ax.legend(fontsize=7, loc="upper right")
+    legend_outside(ax, fontsize=7)
     ax.set_title(f"{filter}: mean estimated tracks (runs that diverged\n"
                  f"beyond {result.config.divergence_m:g} m or strayed left out)", fontsize=9)
     _save(fig, path)
@@ -67,7 +67,7 @@ def plot_error_curves(result, path: str | Path) -> None:
     """Fig. 8: run-averaged position error versus mission time, per T_com, one panel per estimator."""
     plt = pyplot()
     filters = _filters_run(result)
-    fig, axes = plt.subplots(len(filters), 1, figsize=(8, 3 * len(filters)), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(len(filters), 1, figsize=(10, 3 * len(filters)), sharex=True, squeeze=False)
     axes = axes[:, 0]
     travelled = np.cumsum(np.r_[0.0, np.hypot(*np.diff(result.truth_track, axis=0).T)])[-1]
     for ax, filter in zip(axes, filters):
@@ -78,7 +78,7 @@ def plot_error_curves(result, path: str | Path) -> None:
         ax.set_ylabel("mean position error [m]")
         ax.set_title(f"{filter} ({result.runs} runs, outliers excluded); 1 m = {100 / travelled:.3f} %etd")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, ncol=3)
+        legend_outside(ax, fontsize=7)
     axes[-1].set_xlabel("mission time [s]")
     _save(fig, path)
 
@@ -165,7 +165,7 @@ def plot_track(t_s, estimate_xy, path: str | Path, *, beacon_xy, sigma_xy=None, 
         sigma = np.asarray(sigma_xy, dtype=float)
         cov_xy = np.zeros((len(sigma), 2, 2))
         cov_xy[:, 0, 0], cov_xy[:, 1, 1] = sigma[:, 0] ** 2, sigma[:, 1] ** 2
-    fig, ax = plt.subplots(figsize=(6, 6))
+    fig, ax = plt.subplots(figsize=(8.5, 6))
     if truth_xy is not None:
         ax.plot(*np.asarray(truth_xy).T, "k", lw=1.2, label="truth")
     ax.plot(*estimate.T, "C0", lw=1.0, label="estimate")
@@ -183,7 +183,7 @@ def plot_track(t_s, estimate_xy, path: str | Path, *, beacon_xy, sigma_xy=None, 
     ax.set_aspect("equal")
     ax.set_xlabel("east x [m]")
     ax.set_ylabel("north y [m]")
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     ax.set_title(title)
     _save(fig, path)
 

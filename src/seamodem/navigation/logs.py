@@ -10,7 +10,10 @@ dropped); what cannot is a one-line :class:`~seamodem.errors.InputFileError` or
 Files are read with the :mod:`csv` module, so a quoted field may hold commas, ``#``
 and quotes (the receiver's ``payload_text``). Lines starting with ``#`` before the
 header are metadata comments (``# key: json-value``, as ``seamodem rx`` writes them;
-:func:`read_metadata`); a file without them is read the same way.
+:func:`read_metadata`); a file without them is read the same way. A ``.jsonl`` file
+(one JSON object per line, as ``seamodem rx -o M.jsonl`` writes) is read as the same
+table: ``null`` is an empty cell, ``true``/``false`` are 1/0. A binary file is refused
+by name, without its bytes.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, InputFileError
+from ..errors import ConfigError, InputFileError, value_text
 from .geometry import check_lat_lon, geodetic_to_local
 
 __all__ = [
@@ -70,7 +73,13 @@ def _read_table(path, what: str):
     path = Path(path)
     if not path.is_file():
         raise InputFileError(f"{what} not found: {path}")
-    text = path.read_text(encoding="utf-8-sig", errors="replace")  # -sig: a spreadsheet's byte-order mark
+    raw = path.read_bytes()
+    if b"\0" in raw[:4096]:  # a recording or an archive: its bytes would make an unreadable message
+        raise InputFileError(f"{what} {path}: binary data, not a text table (a CSV or JSON Lines file of "
+                             "named columns expected)")
+    text = raw.decode("utf-8-sig", errors="replace")  # -sig: a spreadsheet's byte-order mark
+    if path.suffix.lower() == ".jsonl" or text.lstrip().startswith("{"):
+        return _jsonl_table(text, path, what)
     lines = text.splitlines(keepends=True)
     comments, k = [], 0
     while k < len(lines) and (not lines[k].strip() or lines[k].lstrip().startswith("#")):
@@ -86,22 +95,58 @@ def _read_table(path, what: str):
     return header, rows, comments
 
 
+def _jsonl_cell(value) -> str:
+    """A JSON value as the CSV reader would see it: null → empty, true/false → 1/0."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return str(int(value))
+    return str(value)
+
+
+def _jsonl_table(text: str, path: Path, what: str):
+    """(header, rows, []) of a JSON Lines file (``seamodem rx -o M.jsonl``): one object per line."""
+    objects = []
+    for i, line in enumerate(text.splitlines()):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+        except json.JSONDecodeError as exc:
+            raise InputFileError(f"{what} {path}: line {i + 1} is not valid JSON ({exc.msg})") from None
+        if not isinstance(obj, dict):
+            raise InputFileError(f"{what} {path}: line {i + 1} is not a JSON object")
+        objects.append(obj)
+    if objects and "format" in objects[0] and "frame_index" not in objects[0]:
+        objects.pop(0)  # format 1's header object
+    header = list(dict.fromkeys(k for obj in objects for k in obj))
+    if not header:
+        raise InputFileError(f"{what} {path}: no data rows (need at least one JSON object)")
+    return header, [[_jsonl_cell(obj.get(k)) for k in header] for obj in objects], []
+
+
+#: a boolean cell (``crc_ok``) as a number
+_BOOLEANS = {"true": 1.0, "false": 0.0}
+
+
 def _float_column(rows, i: int, column: str, path, what: str) -> np.ndarray:
     """Column ``i`` as floats; an empty or missing cell is NaN, text that is not a number an error."""
     out = np.empty(len(rows))
     for r, row in enumerate(rows):
         cell = row[i].strip() if i < len(row) else ""
         try:
-            out[r] = float(cell) if cell else math.nan
+            out[r] = _BOOLEANS.get(cell.lower(), math.nan) if cell.lower() in _BOOLEANS or not cell else float(cell)
         except ValueError:
-            raise InputFileError(f"{what} {path}: data row {r + 1}, column {column}: not a number ({cell!r})") from None
+            raise InputFileError(f"{what} {path}: data row {r + 1}, column {column}: not a number ({value_text(cell)})") from None
     return out
 
 
 def _check_columns(header, required, path, what) -> None:
     missing = [c for c in required if c not in header]
     if missing:
-        raise InputFileError(f"{what} {path}: missing column(s) {', '.join(missing)} (has: {', '.join(header)})")
+        has = ", ".join(h if len(h) <= 40 else h[:37] + "..." for h in header[:12])
+        more = f" and {len(header) - 12} more" if len(header) > 12 else ""
+        raise InputFileError(f"{what} {path}: missing column(s) {', '.join(missing)} (has: {has}{more})")
 
 
 def read_columns(path, required, *, optional=(), time_column=None, what="file") -> dict[str, np.ndarray]:
@@ -281,10 +326,10 @@ def read_measurements(path, *, what: str = "measurement file") -> dict[str, np.n
     Parameters
     ----------
     path : str or Path
-        CSV with the columns ``frame_index, t_emit_s, t_arrival_s, tof_s, range_m,
+        CSV or JSON Lines (what any ``seamodem rx`` mode writes) with the columns ``frame_index, t_emit_s, t_arrival_s, tof_s, range_m,
         v_r_mps, snr_db`` (SI units, SPEC §1); optional ``sigma_range_m`` [m] and
         ``sigma_v_r_mps`` [m/s] (also accepted as ``range_std_m``,
-        ``v_r_std_mps``), ``crc_ok`` (1, 0 or empty), ``status`` (text) and, from a
+        ``v_r_std_mps``), ``crc_ok`` (true, false, 1, 0 or empty), ``status`` (text) and, from a
         hydrophone array (``seamodem rx --array``), ``azimuth_body_rad`` and
         ``sigma_azimuth_body_rad`` (empty where a frame has none). Other
         columns (``payload_text``...) are ignored. Metadata comment lines before

@@ -80,8 +80,9 @@ def summarize_runs(mean_error: np.ndarray, var_error: np.ndarray, max_error: np.
     maximum of the position error over time [m, m², m]; ``travelled`` each run's
     travelled distance [m]. %etd = error / travelled distance × 100. ``diverged``
     counts the runs whose error ever exceeded ``divergence_m`` (or was not finite);
-    they are among the outliers when the IQR rule catches them, and a row with any
-    is not a result (:func:`format_table` says so).
+    they are among the outliers when the IQR rule catches them; ``diverged_in_mean``
+    counts those it does not catch, which are inside the mean (:func:`format_table`
+    then marks the mean as not a result).
     """
     diverged = ~np.isfinite(max_error) | (max_error > divergence_m)
     finite = np.isfinite(mean_error)
@@ -91,7 +92,8 @@ def summarize_runs(mean_error: np.ndarray, var_error: np.ndarray, max_error: np.
     if not keep.any():
         nan = float("nan")
         return {"mean_error_m": nan, "error_variance_m2": nan, "etd_max_pct": nan, "etd_mean_pct": nan,
-                "outliers": int(out.sum()), "diverged": int(diverged.sum()), "median_error_m": nan}
+                "outliers": int(out.sum()), "diverged": int(diverged.sum()), "median_error_m": nan,
+                "diverged_in_mean": 0}
     return {
         "mean_error_m": float(mean_error[keep].mean()),
         "error_variance_m2": float(var_error[keep].mean()),
@@ -100,6 +102,7 @@ def summarize_runs(mean_error: np.ndarray, var_error: np.ndarray, max_error: np.
         "outliers": int(out.sum()),
         "diverged": int(diverged.sum()),
         "median_error_m": float(np.median(mean_error[finite])) if finite.any() else float("nan"),
+        "diverged_in_mean": int((diverged & keep).sum()),
     }
 
 
@@ -243,7 +246,10 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
     """The result as text: paper 000's Tables 3 and 4 (with the paper's values when ``paper``) for its
     filters, and one table of every estimator that ran, with outlier and divergence counts.
 
-    A row with diverged runs is not a result: its figure is replaced by ``UNSTABLE`` and the count.
+    Every cell gives its mean, with the outliers and the diverged runs counted beside it. A diverged
+    run (error above ``divergence_m`` at some time: the filter lost the vehicle) is excluded from the
+    mean with the outliers when the IQR rule catches it; a mean that still holds one is marked ``!``
+    and is not a result. The lines under the table say which case each count is.
     """
     by = {(r["tcom_s"], r["filter"]): r for r in result.rows}
     ran = [f for f in ALL_FILTERS if any((t, f) in by for t in result.tcoms)]
@@ -265,15 +271,17 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
         lines.append(f"inertial filter: sensor densities told the truth, bias drift state "
                      f"{'on' if ic.estimate_bias_drift else 'off'}, gate {ic.gate_probability}; fixed lag "
                      f"{result.config.lag_s:g} s")
-    lines.append(f"diverged = runs whose error exceeded {result.config.divergence_m:g} m; outliers (IQR rule) "
-                 "are counted, then excluded from the mean")
+    lines.append(f"mean over the runs kept: outliers (IQR rule on the runs' mean errors) are counted, then "
+                 f"excluded; diverged = runs whose error exceeded {result.config.divergence_m:g} m at some time "
+                 "(the filter lost the vehicle), counted beside the mean")
 
     def cell(r):
         if r is None:
             return f"{'':>22}"
-        if r["diverged"]:
-            return f"{'UNSTABLE':>10} {r['diverged']:>3}/{result.runs:<3} div"
-        return f"{r['mean_error_m']:>10.3f} ({r['outliers']:>3}, {r['diverged']:>2})"
+        mark = "!" if r.get("diverged_in_mean", 0) else " "
+        if not math.isfinite(r["mean_error_m"]):
+            return f"{'no mean':>10} ({r['outliers']:>3}, {r['diverged']:>2}){mark}"
+        return f"{r['mean_error_m']:>10.3f} ({r['outliers']:>3}, {r['diverged']:>2}){mark}"
 
     if "proposed" in ran and paper:
         lines += ["", "Table 3 (paper 000's proposed filter)",
@@ -287,7 +295,7 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
                     f"{r['etd_max_pct']:>8.4f} | {r['etd_mean_pct']:>9.4f}")
             if t in PAPER_TABLE:
                 p = PAPER_TABLE[t]
-                ratio = "  -  " if r["diverged"] else f"{r['mean_error_m'] / p[0]:>5.2f}"
+                ratio = "  -  " if r.get("diverged_in_mean", 0) else f"{r['mean_error_m'] / p[0]:>5.2f}"
                 line += f" || {p[0]:>11.4f} ({p[1]:>3}) | {p[2]:>9.4f} | {ratio}"
             lines.append(line)
     lines += ["", "Mean position error [m] (outliers, diverged) per estimator"
@@ -302,9 +310,15 @@ def format_table(result: MonteCarloResult, *, paper: bool = True) -> str:
                   or abs(noise.sigma_vr_mps - math.sqrt(EQ25_R["v_r"])) > 1e-9):
         lines.append(f"(the paper's values are at its own noise, range {math.sqrt(EQ25_R['range']):.3g} m and v_r "
                      f"{math.sqrt(EQ25_R['v_r']):.3g} m/s; this table is at the noise above)")
-    unstable = sum(r["diverged"] for r in result.rows)
-    if unstable:
-        lines += ["", f"{unstable} run(s) diverged in the rows marked UNSTABLE: those rows are not results "
-                      "(docs/navigation.md, 'Stable defaults')."]
+    diverged = sum(r["diverged"] for r in result.rows)
+    inside = sum(r.get("diverged_in_mean", 0) for r in result.rows)
+    if diverged:
+        lines += ["", f"{diverged} run(s) diverged in all (of {result.runs} per row); "
+                      + (f"{diverged - inside} are among the outliers, outside the means. " if diverged > inside
+                         else "")
+                      + (f"{inside} are inside the means marked '!': those means are not results. " if inside
+                         else "Every mean above is over runs that stayed within "
+                              f"{result.config.divergence_m:g} m. ")
+                      + "(docs/navigation.md, 'Stable defaults')"]
     lines.append(f"wall time {result.wall_time_s:.1f} s")
     return "\n".join(lines)

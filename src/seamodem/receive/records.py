@@ -209,6 +209,8 @@ FIELDS = tuple(f.name for f in dataclasses.fields(MeasurementRecord))
 CORE_FIELDS = ("frame_index", "t_emit_s", "t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db", "v_r_tone_eq9_mps",
                "v_r_bank_mps", "detection_z", "detection_rho", "sigma_range_m", "sigma_v_r_mps",
                "sigma_v_r_bank_mps", "tone_c_n0_dbhz")
+#: what a file must have to be read (SPEC §4; ``seamodem nav track`` requires the same): the others are NaN if absent
+REQUIRED_FIELDS = CORE_FIELDS[:7]
 #: ... and the others, which a file may lack (measured without decoding, or written before the column existed)
 OPTIONAL_FIELDS = tuple(f for f in FIELDS if f not in CORE_FIELDS)
 _TYPES = {f.name: f.type for f in dataclasses.fields(MeasurementRecord)}
@@ -245,10 +247,17 @@ def _json_value(value):
 
 
 def _csv_row(rec: MeasurementRecord) -> dict[str, Any]:
-    row = rec.to_dict()
-    row["crc_ok"] = "" if rec.crc_ok is None else int(rec.crc_ok)
-    row["two_way"] = int(rec.two_way)
-    return {k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()}
+    from ..io.tables import csv_cell
+
+    return {k: csv_cell(v) for k, v in rec.to_dict().items()}
+
+
+def _schema(records_type, fields: Sequence[str]) -> dict[str, Any]:
+    """The sidecar's ``schema``: the null token and each column's name, type and unit."""
+    from ..io.tables import NULL_TOKEN, table_schema
+
+    annotations = {f.name: str(f.type) for f in dataclasses.fields(records_type)}
+    return {"null": NULL_TOKEN, "columns": table_schema(fields, annotations)}
 
 
 def write_measurements(
@@ -287,14 +296,17 @@ def write_measurements(
     (:func:`seamodem.io.files.atomic_outputs`).
 
     CSV: one header row, then one row per record; floats as Python's
-    ``repr`` (shortest round-trip text, ``nan`` when unknown); ``crc_ok`` 1, 0
-    or empty (not decoded); text quoted when it holds a comma, a quote or a
-    line break. JSON Lines: one object per record, ``null`` when unknown.
+    ``repr`` (shortest round-trip text); booleans ``true``/``false``; an
+    unknown value (NaN, ``crc_ok`` of a frame not decoded) is the one null
+    token, an empty cell; text quoted when it holds a comma, a quote or a line
+    break. JSON Lines: one object per record, ``null`` when unknown. The
+    sidecar's ``schema`` gives every column's type and unit
+    (:mod:`seamodem.io.tables`, which also reads the files with pandas or polars).
     """
     path = Path(path)
     kind = kind or _format(path)
     sidecar = measurement_sidecar_path(path)
-    n, unmatched = 0, []
+    n, unmatched, record_type = 0, [], MeasurementRecord
     with atomic_outputs(path, sidecar) as (tmp, tmp_sidecar):
         with tmp.open("w", encoding="utf-8", newline="") as f:
             writer = None
@@ -302,6 +314,7 @@ def write_measurements(
                 writer = csv.DictWriter(f, fieldnames=fields)
                 writer.writeheader()
             for rec in records:
+                record_type = type(rec)
                 if not keep_unmatched and not is_matched(rec):
                     unmatched.append(rec.t_arrival_s)
                     continue
@@ -312,7 +325,7 @@ def write_measurements(
                 f.flush()
                 n += 1
         meta = {"format": MEASUREMENT_FORMAT, "file": path.name, **header, "columns": list(fields), "rows": n,
-                "unmatched_arrivals_s": unmatched}
+                "unmatched_arrivals_s": unmatched, "schema": _schema(record_type, fields)}
         tmp_sidecar.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return n
 
@@ -418,7 +431,8 @@ def read_measurements(path: str | Path) -> Measurements:
     ------
     InputFileError
         Missing file, unknown format, a sidecar that is not JSON or of another
-        format, a row with missing columns or a value that is not a number.
+        format, a row without one of :data:`REQUIRED_FIELDS` (SPEC §4's seven; the
+        other columns may be absent: NaN or their default) or a value that is not a number.
 
     Warns
     -----
@@ -445,10 +459,10 @@ def read_measurements(path: str | Path) -> Measurements:
         raise InputFileError(f"{path} is not a seamodem measurement file ({MEASUREMENT_FORMAT_V1!r} header expected)")
     records = []
     for i, row in enumerate(rows):
-        missing = [k for k in FIELDS if k not in row and k not in OPTIONAL_FIELDS]
+        missing = [k for k in REQUIRED_FIELDS if k not in row]
         if missing:
             raise InputFileError(f"{path}: row {i + 1} lacks {', '.join(missing)}")
-        values = {}
+        values = {k: math.nan for k in CORE_FIELDS}  # a table of the required columns only (SPEC §4)
         for k in FIELDS:
             if k in row:
                 try:
