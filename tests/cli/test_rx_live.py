@@ -254,3 +254,15 @@ def test_bad_streams_are_one_line_exit_2_no_output(rec, tmp_path, data, args, me
     err = p.stderr.decode()
     assert p.returncode == 2 and err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "m.csv").exists() and not (tmp_path / "m.csv.json").exists()
+
+
+def test_sound_card_without_sounddevice_is_one_line_exit_2(tmp_path):
+    import importlib.util
+
+    if importlib.util.find_spec("sounddevice") is not None:
+        pytest.skip("sounddevice is installed here: the message is for machines without it")
+    p = subprocess.run(_rx("--device", "0", "--sample-rate", "96000", "--emit-start", "0", "--emit-period", "3",
+                           "-o", tmp_path / "m.csv"), capture_output=True, env=_env(), timeout=TIMEOUT)
+    err = p.stderr.decode()
+    assert p.returncode == 2 and err.count("\n") == 1 and "pip install 'seamodem[live]'" in err
+    assert not (tmp_path / "m.csv").exists()
