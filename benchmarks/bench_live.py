@@ -116,11 +116,12 @@ def main() -> int:
     def consume():
         for i, line in enumerate(rx.stdout):
             now = time.monotonic()
+            if i:  # line 0 is the sidecar
+                forwarded.append(time.monotonic())  # stamped before the write: the GGA cannot come first
             nav.stdin.write(line)
             nav.stdin.flush()
-            if i:  # line 0 is the sidecar
+            if i:
                 records.append((now, json.loads(line)))
-                forwarded.append(time.monotonic())
         nav.stdin.close()
 
     def listen():

@@ -74,22 +74,28 @@ def test_stdin_stream_gives_the_receivers_records_bit_for_bit(rec, tmp_path):
     assert "the producer closed the stream" in p.stderr and "4 records written" in p.stderr
     meta = json.loads((tmp_path / "live.csv.json").read_text())
     assert meta["complete"] and meta["rows"] == 4 and meta["ended"] == "end of stream"
-    # the same receiver fed the file in the stream's blocks (0.05 s) writes the same bytes
+    # the same receiver fed the file in the stream's blocks (0.05 s), with the live front end's FFT blocks,
+    # writes the same bytes
     src = open_recording(wav)
     emissions = Emissions(times_s=np.array([f["t_emit_s"] for f in json.loads(side.read_text())["frames"]]))
     from seamodem.config import load_config
     from seamodem.receive.settings import ReceiverSettings
 
     cfg = load_config(side, base=CFG)
-    rx = Receiver(cfg, emissions=emissions, settings=ReceiverSettings(decode=False))
+    from seamodem.cli.rx_live import LIVE_FRONT_END_BLOCK
+
+    rx = Receiver(cfg, emissions=emissions, settings=ReceiverSettings(decode=False, front_end_block=LIVE_FRONT_END_BLOCK))
     records = rx.run(channel_blocks(src, 0, block=round(0.05 * FS)), fs=src.sample_rate_hz)
     write_measurements(tmp_path / "file.csv", records, {})
     assert out.read_bytes() == (tmp_path / "file.csv").read_bytes()
 
 
-def test_stream_and_file_differ_only_in_the_detection_statistic(rec, tmp_path):
-    """Offline, the file is read in 2^20-sample blocks; live in 0.05 s blocks: the detector's statistic depends on
-    the context it has seen, the measurements only by float rounding of the block-wise front end."""
+def test_stream_and_file_agree_to_the_front_ends_rounding(rec, tmp_path):
+    """Offline, the file goes through 2^16-sample FFT blocks; live through 2^13-sample ones (latency). The
+    front end filters and decimates in the frequency domain on the block's grid, so the basebands differ by
+    rounding and by the decimation's residue on another grid: arrival times and v_r agree to 1e-9 relative,
+    the noise-based figures (SNR, σ) to a few 1e-4, and the detector's statistic, normalised by the noise it
+    has seen so far, differs more (docs/live.md, "Same answers live as offline")."""
     d, wav, side = rec
     assert subprocess.run(_rx(wav, "--no-decode", "-q", "-o", tmp_path / "off.csv"), env=_env(),
                           timeout=TIMEOUT).returncode == 0
@@ -99,10 +105,15 @@ def test_stream_and_file_differ_only_in_the_detection_statistic(rec, tmp_path):
     off, live = _rows(tmp_path / "off.csv"), _rows(tmp_path / "live.csv")
     assert len(off) == len(live) == 4
     for a, b in zip(off, live):
-        for k in ("t_arrival_s", "tof_s", "range_m", "v_r_mps", "snr_db", "sigma_range_m", "sigma_v_r_mps"):
-            # 1e-9 relative: far below every σ (range σ ~1e-3 m at 300 m is 3e-6 relative)
-            assert math.isclose(float(a[k]), float(b[k]), rel_tol=1e-9, abs_tol=1e-12), (k, a[k], b[k])
         assert a["frame_index"] == b["frame_index"]
+        for k in ("t_arrival_s", "tof_s", "range_m", "v_r_mps"):
+            # 1e-9 relative: 0.2 µm at 200 m, against a range σ of 0.5 mm or more
+            assert math.isclose(float(a[k]), float(b[k]), rel_tol=1e-9), (k, a[k], b[k])
+        # 0.01 dB: the bound on the front end's effect, stated in docs/live.md (seen up to 0.005 dB)
+        assert abs(float(a["snr_db"]) - float(b["snr_db"])) < 0.01
+        for k in ("sigma_range_m", "sigma_v_r_mps"):
+            # 1e-3 relative: σ follows the SNR above (10^(0.01/20) - 1 ≈ 1.2e-3)
+            assert math.isclose(float(a[k]), float(b[k]), rel_tol=1e-3), (k, a[k], b[k])
 
 
 def test_records_on_stdout_sidecar_first_then_one_json_line_per_frame(rec):

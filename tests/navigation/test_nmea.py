@@ -60,3 +60,14 @@ def test_coordinates_round_into_the_next_degree_and_refuse_out_of_range():
         format_lat(91.0)
     with pytest.raises(ValueError, match="longitude must be in"):
         format_lon(float("nan"))
+
+
+def test_the_sentences_shown_in_docs_live_carry_their_checksums():
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "live.md").read_text(encoding="utf-8")
+    shown = [line for line in page.splitlines() if line.startswith("$GP")]
+    assert len(shown) == 2
+    for line in shown:
+        body, cs = line[1:].split("*")
+        assert checksum(body) == cs

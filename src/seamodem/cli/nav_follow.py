@@ -24,7 +24,7 @@ from pathlib import Path
 
 from ..errors import SeamodemError
 
-__all__ = ["add_follow_options", "follow", "run_follow", "parse_udp"]
+__all__ = ["add_follow_options", "follow", "run_follow", "parse_udp", "warm_up"]
 
 EXIT_CODES = {"end of stream": 0, "complete": 0, "stalled": 3, "output closed": 4, "interrupted": 130}
 
@@ -167,6 +167,38 @@ def follow(args: argparse.Namespace, config, command: str) -> int:
     return run_follow(args, options, origin, command)
 
 
+def warm_up(track_options: dict) -> None:
+    """Run the filter once on a synthetic record before the first real one (its kernels' first calls).
+
+    The first position of a run otherwise pays for them (about 0.4 s here, benchmarks/bench_live.py);
+    the records that arrive meanwhile wait in the pipe.
+
+    Parameters
+    ----------
+    track_options : dict
+        :func:`~seamodem.navigation.track.run_track` keywords.
+    """
+    import warnings
+
+    import numpy as np
+
+    from ..navigation.track import run_track
+
+    (bx, by), (sx, sy) = track_options["beacon_xy"], track_options["start_xy"]
+    d = math.hypot(sx - bx, sy - by) + 100.0  # beyond any depth difference
+    zeros = np.zeros(3)
+    imu = {"t_s": np.array([0.0, 0.25, 0.5]), "heading_rad": zeros, "omega_rad_s": zeros, "accel_mps2": zeros}
+    meas = {"frame_index": np.array([0.0]), "t_emit_s": np.array([0.1]), "t_arrival_s": np.array([0.2]),
+            "tof_s": np.array([d / 1500.0]), "range_m": np.array([d]), "v_r_mps": np.array([0.0]),
+            "snr_db": np.array([20.0])}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            run_track(meas, imu, **track_options)
+        except (SeamodemError, ValueError):  # the real records say what is wrong, if anything
+            pass
+
+
 def run_follow(args: argparse.Namespace, track_options: dict, origin, command: str) -> int:
     """Follow MEAS, write each position, send NMEA; the exit code of why it ended.
 
@@ -213,6 +245,7 @@ def run_follow(args: argparse.Namespace, track_options: dict, origin, command: s
         old[sig] = signal.signal(sig, on_signal)
     sock = socket.socket(socket.AF_INET6 if ":" in udp[0] else socket.AF_INET, socket.SOCK_DGRAM) if udp else None
     out = _Output(args.output, meta, columns, stdout)
+    warm_up(track_options)
     n, reason = 0, None
     try:
         for row in follower:

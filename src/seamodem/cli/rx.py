@@ -345,12 +345,16 @@ def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) 
     """One recording, streamed: records are written as frames are found (live: each flushed as it is measured)."""
     from contextlib import nullcontext
 
-    from .rx_live import LiveRun, open_live_input, write_live
+    from .rx_live import LiveRun, live_settings, open_live_input, warm_up, write_live
 
     with reported_warnings("rx"), (LiveRun() if live else nullcontext()) as run:
+        if live:
+            run.warm_up = warm_up(args)  # while the producer starts
         source = open_live_input(args, run.event) if live else None
         # before the receiver's imports: a bad input fails at once
         inputs = _inputs(args, args.recording[0] if args.recording else f"device {args.device}", source)
+        if live:
+            inputs = inputs._replace(settings=live_settings(inputs.settings, args))
 
         from ..receive.recording import receive_file
         from ..receive.records import write_measurements

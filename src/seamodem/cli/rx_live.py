@@ -24,8 +24,11 @@ import time
 
 from ..errors import SeamodemError
 
-__all__ = ["EXIT_CODES", "LiveRun", "add_live_options", "live_requested", "check_live_options", "open_live_input",
-           "write_live"]
+__all__ = ["EXIT_CODES", "LIVE_FRONT_END_BLOCK", "LiveRun", "live_settings", "add_live_options", "live_requested", "check_live_options", "open_live_input",
+           "warm_up", "write_live"]
+
+#: input samples per front-end FFT block live (≈ 85 ms at 96 kHz; a file's 2¹⁶ is ≈ 0.68 s of latency)
+LIVE_FRONT_END_BLOCK = 1 << 13
 
 #: why a live run ended → its exit code
 EXIT_CODES = {"end of stream": 0, "stalled": 3, "output closed": 4, "overrun": 5, "interrupted": 130}
@@ -50,6 +53,9 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
                    help="read a sound card through PortAudio (pip install 'seamodem[live]'); needs --sample-rate")
     g.add_argument("--output-format", choices=("jsonl", "csv"), default="jsonl",
                    help="records on stdout (-o -): JSON Lines (default) or CSV")
+    g.add_argument("--front-end-block", type=int, metavar="N",
+                   help=f"live: input samples per front-end FFT block (default {LIVE_FRONT_END_BLOCK}; smaller: "
+                        "less latency, more CPU)")
     g.add_argument("--no-status", dest="status", action="store_false",
                    help="no status line on stderr (also with -q)")
 
@@ -60,6 +66,29 @@ def live_requested(args: argparse.Namespace) -> bool:
 
     return (args.device is not None or args.output == "-"
             or (len(args.recording) == 1 and is_live_input(args.recording[0])))
+
+
+def live_settings(settings, args: argparse.Namespace):
+    """The receiver's settings for a live run: the front end's short blocks (``--front-end-block``).
+
+    Parameters
+    ----------
+    settings : ReceiverSettings
+    args : argparse.Namespace
+
+    Returns
+    -------
+    ReceiverSettings
+    """
+    import dataclasses
+
+    from ..errors import ConfigError
+
+    block = LIVE_FRONT_END_BLOCK if args.front_end_block is None else args.front_end_block
+    try:
+        return dataclasses.replace(settings, front_end_block=block)
+    except ConfigError as exc:
+        raise SeamodemError(f"front-end-block:{str(exc).partition(':')[2]}") from None
 
 
 def check_live_options(args: argparse.Namespace) -> None:
@@ -89,11 +118,14 @@ class LiveRun:
         Set to end the stream.
     stdout : text file
         The real stdout.
+    warm_up : threading.Thread or None
+        The receiver's warm-up (:func:`warm_up`), waited for before the first block.
     """
 
     def __init__(self):
         self.event = threading.Event()
         self.stdout = sys.stdout
+        self.warm_up: threading.Thread | None = None
         self._old = {}
 
     def __enter__(self):
@@ -159,7 +191,10 @@ class _Status:
     def line(self) -> str:
         last = "" if self.last is None else (f", last: frame {self.last.frame_index} at {self.last.t_arrival_s:.3f} s, "
                                              f"SNR {self.last.snr_db:.1f} dB, range {self.last.range_m:.2f} m")
-        return f"rx: stream {self._stream_time():8.1f} s, {self.frames} frame{'s' if self.frames != 1 else ''}{last}"
+        behind = getattr(self.source, "backlog_s", 0.0)
+        lag = f", {behind:.1f} s behind" if behind >= 0.5 else ""
+        return (f"rx: stream {self._stream_time():8.1f} s{lag}, {self.frames} frame{'s' if self.frames != 1 else ''}"
+                f"{last}")
 
     def _tick(self):
         while not self._done.wait(1.0):
@@ -175,6 +210,48 @@ class _Status:
         self._done.set()
         if self.tty:
             print("\r" + self.line(), file=sys.stderr, flush=True)
+
+
+def warm_up(args: argparse.Namespace) -> threading.Thread:
+    """Run the receiver once on a synthetic frame, in a thread started before the stream is opened.
+
+    The first frame of a run otherwise pays for the first calls of the compiled kernels and of scipy's
+    transforms (about 1.5 s here, benchmarks/bench_live.py). Started before the stream's header is
+    read, it runs while the producer starts; :func:`write_live` waits for it before the first block
+    (the source's own thread keeps reading the pipe meanwhile, so the producer does not wait).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``rx``'s options (the frame configuration, decoding on or off).
+
+    Returns
+    -------
+    threading.Thread
+    """
+    def work():
+        import numpy as np
+
+        from ..receive.settings import Emissions, ReceiverSettings
+        from ..receive.stream import Receiver
+        from ..transmit.beacon import BeaconSchedule, render_beacon
+        from ._common import config_from_args
+
+        try:
+            config = config_from_args(args)
+            settings = ReceiverSettings(decode=args.decode, front_end_block=LIVE_FRONT_END_BLOCK)
+        except (SeamodemError, ValueError):  # the run reports it itself
+            return
+        beacon = render_beacon(config, BeaconSchedule(count=1, period_s=1.0, start_s=0.1))
+        x = np.concatenate([*beacon.blocks(progress=False), np.zeros(int(config.sample_rate_hz))])
+        x = x + 1e-3 * np.random.default_rng(0).standard_normal(x.size)
+        for _ in Receiver(config, emissions=Emissions(start_s=0.1, period_s=1.0), settings=settings).run(
+                [x], fs=config.sample_rate_hz):
+            pass
+
+    thread = threading.Thread(target=work, daemon=True, name="rx warm-up")
+    thread.start()
+    return thread
 
 
 def write_live(args: argparse.Namespace, out, records, header: dict, source, run: LiveRun) -> int:
@@ -207,6 +284,8 @@ def write_live(args: argparse.Namespace, out, records, header: dict, source, run
                                 "block_s": getattr(source, "block_s", None)}}
     writer = MeasurementWriter(out, header, stream=stdout if out is None else None,
                                kind=args.output_format if out is None else None)
+    if run.warm_up is not None:
+        run.warm_up.join()
     status = _Status(source, enabled=args.status and not args.quiet)
     reason, error = None, None
     t_start = time.monotonic()

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import queue
 import select
 import stat
 import struct
@@ -183,6 +184,50 @@ class _Reader:
         return bytes(out)
 
 
+class _Buffered:
+    """A :class:`_Reader` run in a thread: the pipe is emptied as it fills, whatever the receiver is doing.
+
+    The producer (``arecord``) never blocks on a full pipe while the receiver is busy (starting up,
+    decoding a hard frame): what it wrote waits here, counted in :attr:`backlog`.
+    """
+
+    def __init__(self, reader: _Reader):
+        self.reader, self.name = reader, reader.name
+        self.end_reason: str | None = None
+        self.backlog = 0  # bytes read from the pipe and not yet taken
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._pending = b""
+        threading.Thread(target=self._run, daemon=True, name=f"read {reader.name}").start()
+
+    def _run(self) -> None:
+        while True:
+            try:
+                data = self.reader.read(1 << 16)
+            except OSError:  # closed under the thread: the run is over
+                data = b""
+            with self._lock:
+                self.backlog += len(data)
+            self._queue.put(data)
+            if not data:
+                return
+
+    def read(self, n: int) -> bytes:
+        """Up to ``n`` bytes, waiting for some; b"" at the end (``end_reason`` then says which)."""
+        if not self._pending:
+            self._pending = self._queue.get()
+            if not self._pending:
+                self.end_reason = self.reader.end_reason
+                return b""
+        data, self._pending = self._pending[:n], self._pending[n:]
+        with self._lock:
+            self.backlog -= len(data)
+        return data
+
+    def close(self) -> None:
+        self.reader.close()
+
+
 def _wav_format(fmt: bytes, name: str) -> tuple[PcmFormat, int, float]:
     """(sample format, channels, rate) of a WAV ``fmt `` chunk."""
     tag, channels, rate, _, _, bits = struct.unpack("<HHIIHH", fmt[:16])
@@ -254,7 +299,7 @@ class LiveSource(RecordingSource):
         from .source import clip_level
 
         super().__init__(name, sample_rate_hz, n_channels, None, kind="stream", clip_level=clip_level(pcm.subtype))
-        self._reader, self.pcm, self.block_s = reader, pcm, float(block_s)
+        self._reader, self.pcm, self.block_s = _Buffered(reader), pcm, float(block_s)
         self._pos, self._rest = 0, b""
         self.dropped_bytes = 0
 
@@ -262,6 +307,11 @@ class LiveSource(RecordingSource):
     def end_reason(self) -> str | None:
         """Why the stream ended (None while it runs)."""
         return self._reader.end_reason
+
+    @property
+    def backlog_s(self) -> float:
+        """Stream read from the pipe and not yet handed to the receiver [s]: how far behind it is."""
+        return self._reader.backlog / (self.pcm.width * self.n_channels * self.sample_rate_hz)
 
     def _read(self, channels, start, stop, block):
         if start < self._pos:

@@ -17,7 +17,7 @@ Examples
 --------
 >>> checksum("GPGGA")
 '56'
->>> gga(time_s=45319.0, lat_deg=48.1173, lon_deg=11.516666667, sigma_m=0.9)[:44]
+>>> gga(time_s=45319.0, lat_deg=48.1173, lon_deg=11.516666667, sigma_m=0.9)[:43]
 '$GPGGA,123519.00,4807.038000,N,01131.000000'
 """
 
