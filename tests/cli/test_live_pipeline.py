@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -129,3 +131,40 @@ def test_follow_bad_options_are_one_line_exit_2(recording, capsys, extra, messag
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
     assert not (d / "t.csv").exists()
+
+
+def _nav_follow(d, *extra):
+    return [sys.executable, "-m", "seamodem", "nav", "track", "-", "--follow", "--imu", str(d / "imu.csv"),
+            "--beacon", "0,0", "--start=-200,80", "--start-speed", "1.5", *extra]
+
+
+def _record_line(k: int) -> bytes:
+    t = 3.0 * k + 0.14
+    x = START_XY[0] + SPEED * t
+    r = float(np.hypot(x, START_XY[1]))
+    return (json.dumps({"frame_index": k, "t_emit_s": 3.0 * k, "t_arrival_s": t, "tof_s": r / 1500, "range_m": r,
+                        "v_r_mps": -SPEED * x / r, "snr_db": 15.0, "sigma_range_m": 0.01,
+                        "sigma_v_r_mps": 0.01}) + "\n").encode()
+
+
+def test_follow_stalled_input_exit_3_and_ctrl_c_exit_130(recording, tmp_path):
+    d = recording
+    for extra, action, code, reason in ((["--stall-timeout", "2"], None, 3, "stalled"),
+                                        ([], signal.SIGINT, 130, "interrupted")):
+        out = tmp_path / f"{reason}.csv"
+        proc = subprocess.Popen(_nav_follow(d, *extra, "-o", str(out)), stdin=subprocess.PIPE,
+                                stderr=subprocess.PIPE, env=_env())
+        proc.stdin.write(_record_line(0) + _record_line(1))
+        proc.stdin.flush()
+        deadline = time.monotonic() + TIMEOUT
+        while (time.monotonic() < deadline and proc.poll() is None
+               and (not out.exists() or out.read_text().count("\n") < 3)):
+            time.sleep(0.2)  # both positions written (header + 2 rows), the pipe still open
+        if action is not None:
+            proc.send_signal(action)
+        assert proc.wait(TIMEOUT) == code, proc.stderr.read().decode()
+        proc.stdin.close()
+        err = proc.stderr.read().decode()
+        assert reason in err and "Traceback" not in err
+        side = json.loads(out.with_suffix(".json").read_text())
+        assert side["ended"] == reason and side["positions"] == 2
