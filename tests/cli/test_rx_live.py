@@ -277,3 +277,18 @@ def test_sound_card_without_sounddevice_is_one_line_exit_2(tmp_path):
     err = p.stderr.decode()
     assert p.returncode == 2 and err.count("\n") == 1 and "pip install 'seamodem[live]'" in err
     assert not (tmp_path / "m.csv").exists()
+
+
+def test_nan_in_the_stream_is_a_one_line_error_and_the_sidecar_says_so(rec, tmp_path):
+    d, wav, side = rec
+    x, _ = soundfile.read(wav, dtype="float32")
+    x[int(2.8 * FS)] = np.nan  # after two whole frames
+    p = subprocess.run(_rx("-", "--raw", "FLOAT_LE", "--sample-rate", FS, "--config", side, "--no-decode", "-o",
+                           tmp_path / "m.csv"), input=x.astype("<f4").tobytes(), capture_output=True, env=_env(),
+                       timeout=TIMEOUT)
+    err = p.stderr.decode()
+    assert p.returncode == 2 and "stdin contains NaN or infinite samples" in err and "Traceback" not in err
+    meta = json.loads((tmp_path / "m.csv.json").read_text())
+    # the records measured before the bad sample stay (each is whole); the sidecar says the run failed
+    assert meta["complete"] is False and meta["ended"].startswith("error: ") and meta["rows"] >= 2
+    assert len(_rows(tmp_path / "m.csv")) == meta["rows"]

@@ -312,7 +312,7 @@ def write_live(args: argparse.Namespace, out, records, header: dict, source, run
         os.dup2(devnull, stdout.fileno())
     reason = reason or getattr(source, "end_reason", None) or "end of stream"
     t_stream = source.stats.read / source.sample_rate_hz
-    end = {"ended": reason if error is None else f"error: {error}", "stream_s": t_stream,
+    end = {"ended": reason if error is None else f"error: {error}", "complete": error is None, "stream_s": t_stream,
            "wall_s": time.monotonic() - t_start}
     if getattr(source, "overruns", None):
         end["overruns"] = source.overruns

@@ -399,11 +399,12 @@ class MeasurementWriter:
         return True
 
     def close(self, **end: Any) -> None:
-        """Close the file and complete its sidecar (rows, unmatched arrivals and ``end``, e.g. why it ended).
+        """Close the file and complete its sidecar (rows, unmatched arrivals and ``end``, e.g. why it ended;
+        ``complete=False`` in ``end`` marks a run that failed).
 
         On a stream nothing more is written (the stream is left open).
         """
-        self.meta.update(rows=self.rows, complete=True, unmatched_arrivals_s=self.unmatched, **end)
+        self.meta.update({"rows": self.rows, "complete": True, "unmatched_arrivals_s": self.unmatched} | end)
         if self.path is not None:
             self._f.close()
             self._write_sidecar()
