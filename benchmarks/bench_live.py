@@ -63,11 +63,56 @@ def _simulate(folder: Path, count: int, env: dict) -> None:
     (folder / "imu.csv").write_text("t_s,heading_rad,omega_rad_s,accel_mps2\n" + "".join(f"{x:.2f},0,0,0\n" for x in t))
 
 
+def filter_cost(hours: float = 1.0) -> list[str]:
+    """CPU time of one position of ``nav track --follow`` as the mission grows (it reruns the causal filter).
+
+    A synthetic mission: IMU at 4 Hz, a record every 3 s (straight line at 1 m/s, beacon 500 m abeam),
+    :class:`~seamodem.navigation.follow.FollowTracker` fed record by record; the time of ``add`` at a few
+    mission lengths.
+    """
+    import math
+
+    import numpy as np
+
+    from seamodem.navigation.follow import FollowTracker
+
+    folder = Path(tempfile.mkdtemp(prefix="bench_live_filter_"))
+    t_end = hours * 3600.0
+    (folder / "imu.csv").write_text("t_s,heading_rad,omega_rad_s,accel_mps2\n" +
+                                    "".join(f"{t:.2f},0,0,0\n" for t in np.arange(0, t_end + 1, 0.25)))
+    tracker = FollowTracker(folder / "imu.csv", dict(beacon_xy=(0.0, 500.0), start_xy=(0.0, 0.0),
+                                                     start_speed_mps=1.0))
+    cost = []
+    for k, t in enumerate(np.arange(1.0, t_end, 3.0)):
+        r = math.hypot(t, 500.0)
+        row = {"frame_index": k, "t_emit_s": t - r / 1500, "t_arrival_s": t, "tof_s": r / 1500, "range_m": r,
+               "v_r_mps": -t / r, "snr_db": 15.0, "sigma_range_m": 0.01, "sigma_v_r_mps": 0.01}
+        t0 = time.perf_counter()
+        tracker.add(row)
+        cost.append(time.perf_counter() - t0)
+    lines = ["", f"nav track --follow, CPU per position as the mission grows (synthetic, {hours:g} h, IMU 4 Hz, "
+                 "T_com 3 s) [ms] (goal record -> UDP <= 20 ms)"]
+    for minutes in (3, 10, 30, 45, 60):
+        k = int(minutes * 60 / 3) - 1
+        if k < len(cost):
+            window = cost[max(0, k - 5):k + 1]  # the median of 6 neighbours: one number less noisy
+            lines.append(f"  at {minutes:3d} min ({k + 1:5d} records): {1e3 * statistics.median(window):6.1f}")
+    return lines
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--minutes", type=float, default=2.0)
     ap.add_argument("--speed", type=float, default=1.0, help="producer pace, × real time")
+    ap.add_argument("--filter-cost-only", action="store_true",
+                    help="only the navigator's cost per position, appended to the results file")
     a = ap.parse_args()
+    if a.filter_cost_only:
+        text = "\n".join(filter_cost()) + "\n"
+        print(text)
+        with OUT.open("a") as f:
+            f.write(text)
+        return 0
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
     folder = Path(tempfile.mkdtemp(prefix="bench_live_"))
     count = int(round(a.minutes * 60 / 3))
@@ -179,6 +224,7 @@ def main() -> int:
     for i, (now, r) in enumerate(records):
         u = f"{1e3 * udp_lat[i]:.1f}" if i < len(udp_lat) else "-"
         lines.append(f"  {r['frame_index']:4d} {r['t_arrival_s']:9.3f} {lat[i]:7.3f} {u:>8s}")
+    lines += filter_cost()
     text = "\n".join(lines) + "\n"
     print(text)
     OUT.write_text(text)

@@ -292,3 +292,17 @@ def test_nan_in_the_stream_is_a_one_line_error_and_the_sidecar_says_so(rec, tmp_
     # the records measured before the bad sample stay (each is whole); the sidecar says the run failed
     assert meta["complete"] is False and meta["ended"].startswith("error: ") and meta["rows"] >= 2
     assert len(_rows(tmp_path / "m.csv")) == meta["rows"]
+
+
+def test_csv_on_stdout_starts_with_its_sidecar_line(rec):
+    d, wav, side = rec
+    p = subprocess.run(_rx("-", "--config", side, "--no-decode", "-o", "-", "--output-format", "csv"),
+                       stdin=open(wav, "rb"), capture_output=True, env=_env(), timeout=TIMEOUT)
+    assert p.returncode == 0, p.stderr
+    first, rest = p.stdout.decode().split("\n", 1)
+    from seamodem.receive.records import STREAM_HEADER_PREFIX
+
+    assert first.startswith(STREAM_HEADER_PREFIX)
+    assert json.loads(first[len(STREAM_HEADER_PREFIX):])["format"] == "seamodem.measurements/2"
+    rows = list(csv.DictReader(io.StringIO(rest)))
+    assert [int(r["frame_index"]) for r in rows] == [0, 1, 2, 3]
