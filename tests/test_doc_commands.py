@@ -144,6 +144,11 @@ ELSEWHERE = {
     "seamodem nav track meas.csv --imu imu.csv --beacon 45,-25 --start 0,0 --depth 5 25 --sound-speed-profile "
     "examples/water/thermocline_svp.csv -o track.csv":
         "needs an IMU log; tests/navigation/test_track_profile.py runs nav track --sound-speed-profile --depth",
+    "seamodem rx --device 1 --sample-rate 96000 --emit-start 0 --emit-period 3 -o meas.csv":
+        "needs a sound card (docs/live.md); tests/io/test_device.py runs the source with a stand-in for PortAudio",
+    "seamodem nav track meas.csv --follow --imu imu.csv --beacon 50,100 --start 0,0 -o track.csv":
+        "follows a file a running rx is writing (docs/live.md); tests/navigation/test_follow.py follows a growing "
+        "file, tests/cli/test_live_pipeline.py runs the whole pipe",
     "seamodem rx RECORDING.wav --emit-start 0 --emit-period 3 -o MEAS.csv":
         "a synopsis; docs/guide.md's 'seamodem rx sea.wav --emit-start 0 --emit-period 3' runs here",
 }

@@ -38,7 +38,7 @@ def array_records(array, inputs) -> list:
     """
     from ..receive.array import receive_array_file
 
-    return receive_array_file(inputs.path, inputs.config, array.element_positions_m, emissions=inputs.emissions,
+    return receive_array_file(inputs.source, inputs.config, array.element_positions_m, emissions=inputs.emissions,
                               settings=inputs.settings, complex_gains=array.complex_gains,
                               position_sigma_m=array.position_sigma_m, pilot=inputs.pilot,
                               payloads=inputs.payloads, assume=array.assume)

@@ -192,6 +192,9 @@ def add_parser(sub) -> None:
     t.add_argument("--truth", metavar="TRUTH.csv", help="true track (t_s, x_m, y_m) for error statistics")
     t.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="track output; OUT_frames.csv, OUT.png and OUT.json beside it")
+    from .nav_follow import add_follow_options  # --follow: real time, NMEA out (docs/live.md)
+
+    add_follow_options(t)
     t.set_defaults(run=run_track)
 
 
@@ -280,6 +283,14 @@ def run_track(args: argparse.Namespace) -> int:
     overrides["window_s"] = args.window
     overrides["min_speed_mps"] = args.min_speed
     smooth = "batch" if args.smooth else ("fixed-lag" if args.fixed_lag is not None else None)
+    if args.follow:
+        from .nav_follow import follow
+
+        args.profile = sound_speed_profile(args)
+        with reported_warnings("nav track"):
+            return follow(args, InertialConfig(**overrides), command_line())
+    if args.nmea or args.utc_start or args.stall_timeout is not None:
+        raise SeamodemError("nmea: --nmea, --utc-start and --stall-timeout go with --follow")
     # what the readers repaired: one line each on stderr (also when the run then fails)
     with reported_warnings("nav track"):
         summary = track_from_files(

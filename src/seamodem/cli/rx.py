@@ -49,12 +49,13 @@ def add_parser(sub) -> None:
     )
     p.add_argument(
         "recording",
-        nargs="+",
+        nargs="*",
         metavar="RECORDING",
-        help="audio file (WAV...), any sample rate holding the band; several: decoded in parallel into one output",
+        help="audio file (WAV...), any sample rate holding the band; several: decoded in parallel into one output; "
+             "'-', a FIFO or /dev/stdin: a live stream (docs/live.md)",
     )
     add_config_options(p)
-    p.add_argument("-o", "--output", required=True, metavar="MEAS", help="output .csv or .jsonl")
+    p.add_argument("-o", "--output", required=True, metavar="MEAS", help="output .csv or .jsonl; '-': stdout, live")
     p.add_argument("--emit-start", type=float, metavar="T0", help="emission time of frame 0 [s] (PPS beacon)")
     p.add_argument("--emit-period", type=float, metavar="TCOM", help="time between emissions [s]")
     p.add_argument("--sound-speed", type=float, metavar="M/S",
@@ -109,6 +110,9 @@ def add_parser(sub) -> None:
     p.add_argument("--plot-frames", type=int, default=3, metavar="N", help="frames to plot (default 3)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     _add_batch_options(p)
+    from .rx_live import add_live_options  # '-', FIFOs, raw PCM, a sound card
+
+    add_live_options(p)
     p.set_defaults(run=run)
     from .rx_reference import add_reference_options  # --reference: ranging on other waveforms
 
@@ -192,7 +196,7 @@ def _frame_emissions(args, recording: str, sidecar, duration_s: float):
         raise InputFileError("sidecar: its 'frames' list lacks valid t_emit_s values") from None
     if times.size == 0:
         raise InputFileError("sidecar: lists no frames")
-    if times[0] - args.clock_offset >= duration_s:
+    if duration_s is not None and times[0] - args.clock_offset >= duration_s:
         raise InputFileError(
             f"sidecar does not match {recording}: its first emission is at {times[0]:g} s, "
             f"after the recording's end at {duration_s:g} s"
@@ -260,15 +264,17 @@ class _Inputs(NamedTuple):
     profile: object = None
 
 
-def _inputs(args: argparse.Namespace, recording: str) -> _Inputs:
-    """The recording (opened once), its configuration, emissions, receiver settings, pilot and payloads."""
+def _inputs(args: argparse.Namespace, recording: str, source=None) -> _Inputs:
+    """The recording (opened once, or the live ``source`` given), its configuration, emissions, receiver settings,
+    pilot and payloads."""
     from ..io.sidecar import sidecar_path, sidecar_payloads, sidecar_pilot_bits
     from ..io.source import open_recording
 
     # a .mat recording: its variable and, when it holds none, its rate (the same options as --reference)
     profile = sound_speed_profile(args)
-    source = open_recording(recording, mat_variable=getattr(args, "mat_variable", None),
-                            sample_rate_hz=getattr(args, "sample_rate", None))
+    if source is None:
+        source = open_recording(recording, mat_variable=getattr(args, "mat_variable", None),
+                                sample_rate_hz=getattr(args, "sample_rate", None))
     source.one_channel(0 if args.array else args.channel)
     sidecar, own = _sidecar_for(args.config, recording)
     profile = _water_profile(args, profile, sidecar)
@@ -309,6 +315,16 @@ def _header(inputs: list[_Inputs], *, segment_s: float | None = None, batch: boo
 
 
 def run(args: argparse.Namespace) -> int:
+    from .rx_live import check_live_options, live_requested
+
+    if not args.recording and args.device is None:
+        raise SeamodemError("recording: give a RECORDING ('-' for stdin) or --device")
+    if live_requested(args):
+        check_live_options(args)
+        out = None if args.output == "-" else check_writable(args.output)
+        if out is not None and out.suffix.lower() not in (".csv", ".jsonl"):
+            raise SeamodemError(f"output: must end in .csv or .jsonl, or be '-' (stdout), got {str(out)!r}")
+        return _run_one(args, out, live=True)
     batch = len(args.recording) > 1 or any(getattr(args, name) not in (None, False) for name in BATCH_OPTIONS)
     out = check_writable(args.output)
     if out.suffix.lower() not in (".csv", ".jsonl"):
@@ -328,10 +344,20 @@ def run(args: argparse.Namespace) -> int:
     return (_run_many if batch else _run_one)(args, out)
 
 
-def _run_one(args: argparse.Namespace, out: Path) -> int:
-    """One recording, streamed: records are written as frames are found."""
-    with reported_warnings("rx"):
-        inputs = _inputs(args, args.recording[0])  # before the receiver's imports: a bad input fails at once
+def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) -> int:
+    """One recording, streamed: records are written as frames are found (live: each flushed as it is measured)."""
+    from contextlib import nullcontext
+
+    from .rx_live import LiveRun, live_settings, open_live_input, warm_up, write_live
+
+    with reported_warnings("rx"), (LiveRun() if live else nullcontext()) as run:
+        if live:
+            run.warm_up = warm_up(args)  # while the producer starts
+        source = open_live_input(args, run.event) if live else None
+        # before the receiver's imports: a bad input fails at once
+        inputs = _inputs(args, args.recording[0] if args.recording else f"device {args.device}", source)
+        if live:
+            inputs = inputs._replace(settings=live_settings(inputs.settings, args))
 
         from ..receive.recording import receive_file
         from ..receive.records import write_measurements
@@ -348,12 +374,14 @@ def _run_one(args: argparse.Namespace, out: Path) -> int:
             on_frame = _plotter(Path(args.plot), args.plot_frames, inputs) if args.plot else None
             records = receive_file(inputs.source, inputs.config, emissions=inputs.emissions, settings=inputs.settings,
                                    channel=args.channel, pilot=inputs.pilot, payloads=inputs.payloads,
-                                   on_frame=on_frame, progress=False if args.quiet else None)
+                                   on_frame=on_frame, progress=False if args.quiet or live else None)
         if inputs.profile is not None:
             records = _along_the_ray(records, inputs, args)
             header |= {"sound_speed_profile": inputs.profile.to_dict(), "beacon_depth_m": args.beacon_depth,
                        "vehicle_depth_m": args.vehicle_depth,
                        "range_m": "straight-line distance of the direct ray traced through the profile"}
+        if live:
+            return write_live(args, out, records, header, inputs.source, run)
         counted = _Counted(records)
         try:
             n = write_measurements(out, counted, header)
@@ -380,7 +408,7 @@ def _along_the_ray(records, inputs: _Inputs, args):
 
     c_max = float(inputs.profile.c_mps.max())
     ranging = ProfileRanging(inputs.profile, args.beacon_depth, [args.vehicle_depth],
-                             max_range_m=min(inputs.source.duration_s * c_max, 20_000.0) + 10.0)
+                             max_range_m=min((inputs.source.duration_s or math.inf) * c_max, 20_000.0) + 10.0)
     c = inputs.settings.sound_speed_mps
     for rec in records:
         if math.isfinite(rec.tof_s):

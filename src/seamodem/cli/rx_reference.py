@@ -157,6 +157,7 @@ def run_reference(args: argparse.Namespace) -> int:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
 
     from ..io.matlab import is_mat
+    from ..io.live import is_live_input, open_live
     from ..io.source import open_recording
     from ..io.wav import RecordingWarning
     from ..transmit.reference import load_references
@@ -164,8 +165,12 @@ def run_reference(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RecordingWarning)
         # --mat-variable names a .mat recording's variable, and a .mat template's (_with_template_options)
-        source = open_recording(recording, mat_variable=args.mat_variable if is_mat(recording) else None,
-                                sample_rate_hz=args.sample_rate)
+        if is_live_input(str(recording)):  # a stream: read to its end, the records written then (docs/live.md)
+            source = open_live(str(recording), raw_format=args.raw, sample_rate_hz=args.sample_rate,
+                               n_channels=args.channels, stall_timeout_s=args.stall_timeout)
+        else:
+            source = open_recording(recording, mat_variable=args.mat_variable if is_mat(recording) else None,
+                                    sample_rate_hz=args.sample_rate)
     for w in caught:
         print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
     if source.n_channels > 1 and args.channel is None and not args.all_channels:

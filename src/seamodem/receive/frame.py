@@ -103,7 +103,8 @@ def receiver_front_end(config: FrameConfig, fs: float, settings: ReceiverSetting
         A new blanker, or None when impulses are kept.
     """
     s = settings
-    plan = plan_front_end(config, fs, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
+    plan = plan_front_end(config, fs, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps,
+                          block_target=s.front_end_block)
     blanker = ImpulseBlanker(threshold=s.impulse_threshold) if s.blank_impulses else None
     return plan, blanker
 

@@ -135,7 +135,8 @@ class FrontEndPlan:
         return float(self.fs * np.sum(taps**2))
 
 
-def plan_front_end(config: FrameConfig, fs: float, *, v_max_mps: float, sound_speed_mps: float) -> FrontEndPlan:
+def plan_front_end(config: FrameConfig, fs: float, *, v_max_mps: float, sound_speed_mps: float,
+                   block_target: int | None = None) -> FrontEndPlan:
     """Choose the filters, decimations and block size for input rate ``fs``.
 
     Parameters
@@ -148,6 +149,10 @@ def plan_front_end(config: FrameConfig, fs: float, *, v_max_mps: float, sound_sp
         Largest |v_r| to receive [m/s]; the tone branch passes ±v_max·f_pt/c.
     sound_speed_mps : float
         c [m/s].
+    block_target : int, optional
+        Input samples per FFT block, roughly (default :data:`_BLOCK_TARGET`, 2¹⁶: the cheapest per sample).
+        A live receiver asks for less: a frame's baseband is ready only when its block is complete, so
+        the block's length adds up to one block of latency.
 
     Raises
     ------
@@ -173,7 +178,8 @@ def plan_front_end(config: FrameConfig, fs: float, *, v_max_mps: float, sound_sp
     tone = Branch(config.tone_hz, tone_pass, tone_stop, d_tone, lowpass_taps(fs, tone_pass, tone_stop))
     longest = max(data.half_length, tone.half_length)
     margin = d_tone * math.ceil(longest / d_tone)
-    n_blocks_of_tone = max(4 * margin // d_tone + 1, _BLOCK_TARGET // d_tone)
+    target = _BLOCK_TARGET if block_target is None else int(block_target)
+    n_blocks_of_tone = max(4 * margin // d_tone + 1, target // d_tone)
     block = d_tone * scipy.fft.next_fast_len(n_blocks_of_tone)
     for br in (data, tone):
         m = block // br.decimation

@@ -40,6 +40,8 @@ __all__ = [
     "measurement_sidecar_path",
     "write_measurements",
     "read_measurements",
+    "MeasurementWriter",
+    "STREAM_HEADER_PREFIX",
 ]
 
 #: format of the sidecar of a plain measurement file
@@ -328,6 +330,97 @@ def write_measurements(
                 "unmatched_arrivals_s": unmatched, "schema": _schema(record_type, fields)}
         tmp_sidecar.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return n
+
+
+#: a CSV measurement stream's first line: this, then its sidecar as one JSON object
+STREAM_HEADER_PREFIX = "# seamodem: "
+
+
+class MeasurementWriter:
+    """Records written and flushed one at a time, as they are measured (a live receiver's output).
+
+    The sidecar comes first: beside a file (``MEAS.csv.json``, marked
+    ``"complete": false`` until :meth:`close`), or on a stream (stdout) as its
+    first line: the JSON object itself (JSON Lines), or
+    :data:`STREAM_HEADER_PREFIX` and the object (CSV). Then one row per record,
+    each flushed as it is written.
+
+    Parameters
+    ----------
+    path : str or Path or None
+        The measurement file; None: write to ``stream``.
+    header : dict
+        Run description, as :func:`write_measurements`.
+    kind : {"csv", "jsonl"}, optional
+        Default: from the suffix of ``path``; on a stream "jsonl".
+    stream : text file, optional
+        Where to write when ``path`` is None (e.g. ``sys.stdout``).
+    fields : sequence of str
+        Columns, in order.
+
+    Attributes
+    ----------
+    rows : int
+        Records written.
+    unmatched : list of float
+        Arrival times of the records without an emission (not written).
+
+    Notes
+    -----
+    Unlike :func:`write_measurements`, the file is not atomic: every row in it
+    is a complete record as soon as it is there (a reader following the file
+    sees frames as they are measured). A ``BrokenPipeError`` from the stream
+    (its reader has gone) is left to the caller.
+    """
+
+    def __init__(self, path: str | Path | None, header: dict[str, Any], *, kind: str | None = None, stream=None,
+                 fields: Sequence[str] = FIELDS):
+        self.path = None if path is None else Path(path)
+        self.kind = kind or ("jsonl" if self.path is None else _format(self.path))
+        self.fields = list(fields)
+        self.rows, self.unmatched = 0, []
+        self.meta = {"format": MEASUREMENT_FORMAT, "file": "-" if self.path is None else self.path.name, **header,
+                     "columns": self.fields, "rows": None, "complete": False}
+        if self.path is None:
+            self._f = stream
+            line = json.dumps(self.meta)
+            self._f.write(line + "\n" if self.kind == "jsonl" else STREAM_HEADER_PREFIX + line + "\n")
+        else:
+            self._write_sidecar()
+            self._f = self.path.open("w", encoding="utf-8", newline="")
+        self._csv = None
+        if self.kind == "csv":
+            self._csv = csv.DictWriter(self._f, fieldnames=self.fields)
+            self._csv.writeheader()
+        self._f.flush()
+
+    def _write_sidecar(self) -> None:
+        with atomic_outputs(measurement_sidecar_path(self.path)) as (tmp,):
+            tmp.write_text(json.dumps(self.meta, indent=1) + "\n", encoding="utf-8")
+
+    def write(self, rec: MeasurementRecord) -> bool:
+        """Write one record and flush it; False (not written) for an arrival without an emission."""
+        if not is_matched(rec):
+            self.unmatched.append(rec.t_arrival_s)
+            return False
+        if self._csv is not None:
+            self._csv.writerow(_csv_row(rec))
+        else:
+            self._f.write(json.dumps({k: _json_value(v) for k, v in rec.to_dict().items()}) + "\n")
+        self._f.flush()
+        self.rows += 1
+        return True
+
+    def close(self, **end: Any) -> None:
+        """Close the file and complete its sidecar (rows, unmatched arrivals and ``end``, e.g. why it ended;
+        ``complete=False`` in ``end`` marks a run that failed).
+
+        On a stream nothing more is written (the stream is left open).
+        """
+        self.meta.update({"rows": self.rows, "complete": True, "unmatched_arrivals_s": self.unmatched} | end)
+        if self.path is not None:
+            self._f.close()
+            self._write_sidecar()
 
 
 def _parse(name: str, value):

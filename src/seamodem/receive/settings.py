@@ -71,6 +71,10 @@ class ReceiverSettings:
         with the decoded symbols as the reference
         (:mod:`~seamodem.receive.wholeframe`): ``v_r_mps`` is then the direct
         path's.
+    front_end_block : int, optional
+        Input samples per front-end FFT block, roughly (default 2¹⁶, the cheapest per sample; a live
+        receiver uses 2¹³ for latency: :func:`~seamodem.receive.frontend.plan_front_end`). Changes the
+        results by float rounding only.
 
     Examples
     --------
@@ -94,6 +98,7 @@ class ReceiverSettings:
     blank_impulses: bool = True
     impulse_threshold: float = 5.0
     whole_frame_doppler: bool = True
+    front_end_block: int | None = None
 
     def __post_init__(self):
         _positive("sound_speed", self.sound_speed_mps)
@@ -108,6 +113,9 @@ class ReceiverSettings:
         p = self.turbo_passes
         if isinstance(p, bool) or not isinstance(p, int) or p < 1:
             raise ConfigError("turbo_passes", f"must be an integer >= 1, got {p!r}")
+        b = self.front_end_block
+        if b is not None and (isinstance(b, bool) or not isinstance(b, int) or b < 1024):
+            raise ConfigError("front_end_block", f"must be an integer >= 1024 samples, got {b!r}")
         for name in ("decode", "follow_track", "blank_impulses", "whole_frame_doppler"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, f"must be true or false, got {getattr(self, name)!r}")

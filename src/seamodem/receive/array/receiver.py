@@ -187,8 +187,8 @@ def receive_array_file(
 
     Parameters
     ----------
-    path : str or Path
-        The recording.
+    path : str, Path or RecordingSource
+        The recording, or an open source (a stream: read to its end, then received).
     config, positions_m, emissions, settings, complex_gains, position_sigma_m, pilot, payloads, assume
         As :func:`receive_array`.
 
@@ -207,17 +207,22 @@ def receive_array_file(
     from ...io.mat import open_recording
 
     geometry = array_geometry(positions_m, assume)
-    source = open_recording(path)
+    from ...io.source import RecordingSource
+
+    source = path if isinstance(path, RecordingSource) else open_recording(path)
     n_el = np.asarray(positions_m).shape[0]
     if source.n_channels != n_el:
         raise InputFileError(f"{path}: has {source.n_channels} channel(s), the array {n_el} elements")
     if geometry.ambiguity:
         warnings.warn(geometry.ambiguity, ReceiverWarning, stacklevel=2)
-    x = np.empty((source.n_samples, n_el))  # filled block by block: one copy of the recording in memory
-    pos = 0
-    for block in source.blocks(list(range(n_el))):
-        x[pos:pos + len(block)] = block
-        pos += len(block)
+    if source.n_samples is None:  # a stream: read to its end
+        x = np.concatenate(list(source.blocks(list(range(n_el)))) or [np.zeros((0, n_el))])
+    else:
+        x = np.empty((source.n_samples, n_el))  # filled block by block: one copy of the recording in memory
+        pos = 0
+        for block in source.blocks(list(range(n_el))):
+            x[pos:pos + len(block)] = block
+            pos += len(block)
     fs = source.sample_rate_hz
     records, _ = receive_array(x, float(fs), config, positions_m, emissions=emissions, settings=settings,
                                complex_gains=complex_gains, position_sigma_m=position_sigma_m, pilot=pilot,
