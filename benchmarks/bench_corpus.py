@@ -37,8 +37,10 @@ PERIOD = 1.0
 SNR_BINS = (-3, 3, 8, 12, 20.01)
 
 
-def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True) -> list[dict]:
-    """One corpus recording through the default receiver: a row per frame sent (missed frames too)."""
+def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False) -> list[dict]:
+    """One corpus recording through the default receiver: a row per frame sent (missed frames too); with
+    ``depths``, the receiver is given the beacon's and the vehicle's depths (as a vehicle has them: a
+    surveyed beacon, its pressure sensor)."""
     from seamodem import BeaconSchedule, get_preset
     from seamodem.receive import Emissions, Receiver, ReceiverSettings
     from seamodem.transmit.beacon import render_beacon
@@ -50,7 +52,8 @@ def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True) ->
     t_emit = sched.start_s + PERIOD * np.arange(n_frames)
     band = (cfg.carrier_hz - cfg.bandwidth_hz / 2, cfg.carrier_hz + cfg.bandwidth_hz / 2)
     rec = synthesize(sc, beacon, t_emit, cfg.sample_rate_hz, cfg.frame_duration_s, band, echoes=echoes)
-    rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True),
+    known = dict(beacon_depth_m=float(-sc.beacon[2]), vehicle_depth_m=float(-sc.track["z"])) if depths else {}
+    rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True, **known),
                   payloads=rec.payloads)
     found = {r.frame_index: r for r in rx.run([rec.samples], fs=cfg.sample_rate_hz) if 0 <= r.frame_index < n_frames}
     rows = []
@@ -145,12 +148,15 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--out", type=Path, default=RESULTS)
     ap.add_argument("--label", default="", help="text for the report's title (e.g. 'before', a commit)")
+    ap.add_argument("--depths", action="store_true",
+                    help="give the receiver the beacon's and the vehicle's depths (ReceiverSettings.beacon_depth_m, "
+                         "vehicle_depth_m), as a vehicle knows them")
     args = ap.parse_args(argv)
     seed = int.from_bytes(os.urandom(3), "little") if args.fresh else args.seed
-    jobs = [(fam, seed * 1000 + 37 * i + j, args.frames, True) for j, fam in enumerate(FAMILIES)
+    jobs = [(fam, seed * 1000 + 37 * i + j, args.frames, True, args.depths) for j, fam in enumerate(FAMILIES)
             for i in range(args.recordings)]
     if not args.no_single_path:
-        jobs += [(f, s, n, False) for f, s, n, _ in jobs]
+        jobs += [(f, s, n, False, d) for f, s, n, _, d in jobs]
     t0 = time.perf_counter()
     rows: list[dict] = []
     if args.jobs > 1:
@@ -166,7 +172,8 @@ def main(argv=None) -> int:
     n_echo = sum(r["echoes"] for r in rows)
     det = [r for r in rows if r["echoes"] and r["detected"]]
     out = [f"# bench_corpus{(' — ' + args.label) if args.label else ''}: base seed {seed}"
-           f"{' (fresh)' if args.fresh else ''}, {args.recordings} recordings x {args.frames} frames per family, "
+           f"{' (fresh)' if args.fresh else ''}{', the ends depths given to the receiver' if args.depths else ''}, "
+           f"{args.recordings} recordings x {args.frames} frames per family, "
            f"{n_echo} frames with echoes ({len(det)} detected), jmse2024, T_com {PERIOD} s, c {C} m/s, in-band SNR "
            f"in [-3, 20] dB (SPEC §1); channel: benchmarks/corpus.py (independent of seamodem.channel); "
            f"{wall:.0f} s wall\n"]

@@ -6,6 +6,7 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from seamodem import get_preset
 from seamodem.receive.bounds import tone_velocity_crlb_mps
@@ -134,3 +135,19 @@ def test_a_fading_tones_sigma_takes_its_amplitude_rate():
     assert np.mean(z <= 3) >= 0.88
     z, _ = _faded_tone_z(rng, 200, None, 0.0)
     assert np.mean(z <= 3) >= 0.97 and np.sqrt(np.mean(z**2)) >= 0.65
+
+
+def test_merged_image_delay_is_the_surface_images_below_the_resolution_only():
+    """The surface image's extra delay from the ends' depths and the slant range: 2·z_b·z_v/(R·c) when R ≫ z
+    (exact: the image's path less the direct one), 0 once it is resolved (≥ 1/B = 112 µs for jmse2024) or
+    when the range is not beyond the depths' difference."""
+    from seamodem.receive.frame import merged_image_delay_s
+
+    for r, zb, zv in ((800.0, 3.0, 3.0), (1000.0, 5.0, 2.0), (600.0, 4.5, 1.5)):
+        d = merged_image_delay_s(r, zb, zv, config=CFG, sound_speed_mps=C)
+        h = math.sqrt(r**2 - (zb - zv) ** 2)
+        assert d == pytest.approx((math.hypot(h, zb + zv) - r) / C, rel=1e-12)
+        assert d == pytest.approx(2 * zb * zv / (r * C), rel=0.01)
+    assert merged_image_delay_s(300.0, 10.0, 10.0, config=CFG, sound_speed_mps=C) == 0.0  # 444 µs: resolved
+    assert merged_image_delay_s(2.0, 10.0, 5.0, config=CFG, sound_speed_mps=C) == 0.0
+    assert merged_image_delay_s(float("nan"), 3.0, 3.0, config=CFG, sound_speed_mps=C) == 0.0

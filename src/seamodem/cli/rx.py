@@ -67,7 +67,8 @@ def add_parser(sub) -> None:
                                "horizontal_range_m its horizontal range, c for Doppler the profile's at the vehicle "
                                "(needs --beacon-depth and --vehicle-depth; with the depths alone, a simulated "
                                "recording's [water] profile from its sidecar)")
-    g.add_argument("--beacon-depth", type=float, metavar="M", help="beacon depth [m], with --sound-speed-profile")
+    g.add_argument("--beacon-depth", type=float, metavar="M", help="beacon depth [m], with --sound-speed-profile (also the arrival's σ term for a "
+                        "surface image merged with the direct path)")
     g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m], with --sound-speed-profile")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
@@ -247,6 +248,9 @@ def _settings(args, sidecar: dict | None, profile=None):
         decode=args.decode,
         turbo_passes=args.turbo_passes,
         blank_impulses=args.blank_impulses,
+        # with a profile, the depths also give the arrival's σ its merged-surface-image term
+        beacon_depth_m=args.beacon_depth if profile is not None else None,
+        vehicle_depth_m=args.vehicle_depth if profile is not None else None,
     ), origin
 
 

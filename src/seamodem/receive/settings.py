@@ -75,6 +75,15 @@ class ReceiverSettings:
         Input samples per front-end FFT block, roughly (default 2¹⁶, the cheapest per sample; a live
         receiver uses 2¹³ for latency: :func:`~seamodem.receive.frontend.plan_front_end`). Changes the
         results by float rounding only.
+    beacon_depth_m, vehicle_depth_m : float, optional
+        Depths of the beacon and of the vehicle [m], when known (a surveyed
+        beacon, the vehicle's pressure sensor). With both, the surface image's
+        extra delay at the measured range, 2·z_b·z_v/(R·c) for R ≫ z, is
+        known: below the signal's resolution 1/B it is an echo merged with the
+        direct path, which biases the arrival by a fraction of that delay with
+        no signature one frame shows, and the arrival's σ takes the delay
+        (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without them
+        the σ cannot cover that bias (docs/receiver.md).
 
     Examples
     --------
@@ -99,6 +108,8 @@ class ReceiverSettings:
     impulse_threshold: float = 5.0
     whole_frame_doppler: bool = True
     front_end_block: int | None = None
+    beacon_depth_m: float | None = None
+    vehicle_depth_m: float | None = None
 
     def __post_init__(self):
         _positive("sound_speed", self.sound_speed_mps)
@@ -116,6 +127,11 @@ class ReceiverSettings:
         b = self.front_end_block
         if b is not None and (isinstance(b, bool) or not isinstance(b, int) or b < 1024):
             raise ConfigError("front_end_block", f"must be an integer >= 1024 samples, got {b!r}")
+        for name in ("beacon_depth_m", "vehicle_depth_m"):
+            z = getattr(self, name)
+            if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or not math.isfinite(z)
+                                  or z < 0):
+                raise ConfigError(name.removesuffix("_m"), f"must be a depth >= 0 m, got {z!r}")
         for name in ("decode", "follow_track", "blank_impulses", "whole_frame_doppler"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, f"must be true or false, got {getattr(self, name)!r}")
