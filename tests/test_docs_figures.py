@@ -16,7 +16,7 @@ def _demo_output() -> dict[str, float]:
     guide = (DOCS / "guide.md").read_text(encoding="utf-8")
     found = {}
     for name, unit in (("range", "cm"), ("v_r", "cm/s")):
-        m = re.search(rf"^{name} vs truth: +RMSE ([\d.]+) {unit} \(bias [+-][\d.]+ {unit}; median CRLB ([\d.]+) {unit}\)",
+        m = re.search(rf"^{name} vs truth: +RMSE ([\d.]+) {unit} \(bias [+-][\d.]+ {unit}; median σ ([\d.]+) {unit}\)",
                       guide, re.M)
         assert m, name
         found[f"{name}_rmse"], found[f"{name}_crlb"] = float(m.group(1)), float(m.group(2))
@@ -27,7 +27,7 @@ def test_guide_prose_quotes_the_demo_output_it_sits_under():
     """The guide said 'Range RMSE is 2× the delay CRLB; v_r RMSE is far above its CRLB' under output at the bounds."""
     out = _demo_output()
     guide = (DOCS / "guide.md").read_text(encoding="utf-8")
-    said = re.search(r"range RMSE ([\d.]+) cm against a median CRLB\s+of ([\d.]+) cm, v_r RMSE ([\d.]+) cm/s "
+    said = re.search(r"range RMSE ([\d.]+) cm against a median σ\s+of ([\d.]+) cm, v_r RMSE ([\d.]+) cm/s "
                      r"against ([\d.]+) cm/s", guide)
     assert said, "guide.md: the sentence comparing the demo's RMSE with the CRLB is gone"
     assert [float(v) for v in said.groups()] == [out["range_rmse"], out["range_crlb"], out["v_r_rmse"],
@@ -101,5 +101,5 @@ def test_guide_demo_output_is_what_the_demo_prints(tmp_path, monkeypatch, capsys
             f"EKF, for comparison, {mean['proposed']:.2f} m (ROSB {mean['rosb']:.2f} m)") in " ".join(readme.split())
     performance = (DOCS / "performance.md").read_text(encoding="utf-8")
     assert f"| positioning, batch smoother (mean error) | {mean['batch']:.2f} m |" in performance
-    assert f"median delay CRLB {100 * summary['range_crlb_median_m']:.3f} cm" in performance
-    assert f"median CRLB {100 * summary['v_r_crlb_median_mps']:.3f} cm/s" in performance
+    assert f"median σ of the records {100 * summary['range_crlb_median_m']:.3f} cm" in performance
+    assert f"median σ of the records {100 * summary['v_r_crlb_median_mps']:.3f} cm/s" in performance

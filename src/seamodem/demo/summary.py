@@ -129,8 +129,7 @@ def format_summary(summary: dict) -> str:
     janus = s.get("waveform", "").startswith("JANUS")
     lines = [
         f"mission: {s['mission_s']:.0f} s, {s['distance_m']:.0f} m travelled, a frame every T_com",
-        *([f"waveform: {s['waveform']} (a frame below is a packet, its payload the packet's 8 bytes; CRLB: "
-           "the receiver's median sigma)"] if janus else []),
+        *([f"waveform: {s['waveform']} (a frame below is a packet, its payload the packet's 8 bytes)"] if janus else []),
         f"frames: {s['frames_emitted']} emitted, {s['frames_detected']} detected, {s['frames_decoded']} decoded, "
         f"{s['crc_ok']} pass the CRC, {s['payloads_correct']} payloads equal to those sent",
     ]
@@ -138,9 +137,9 @@ def format_summary(summary: dict) -> str:
         lines.append(f"in-band SNR per frame (truth): {s['true_snr_db_range'][0]:.1f} to {s['true_snr_db_range'][1]:.1f} dB")
     lines += [
         f"range vs truth: RMSE {100 * s['range_rmse_m']:.2f} cm (bias {100 * s['range_bias_m']:+.2f} cm; "
-        f"median CRLB {100 * s['range_crlb_median_m']:.2f} cm)",
+        f"median σ {100 * s['range_crlb_median_m']:.2f} cm)",
         f"v_r vs truth:   RMSE {100 * s['v_r_rmse_mps']:.2f} cm/s (bias {100 * s['v_r_bias_mps']:+.2f} cm/s; "
-        f"median CRLB {100 * s['v_r_crlb_median_mps']:.3f} cm/s)",
+        f"median σ {100 * s['v_r_crlb_median_mps']:.3f} cm/s)",
         "positioning error (mean / RMS / final, m):",
         f"  {'':34}" + "".join(f" {FILTER_LABELS[f]:>20}" for f in FILTERS),
     ]
