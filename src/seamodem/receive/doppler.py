@@ -46,6 +46,7 @@ __all__ = [
     "tone_track_eq9",
     "dichotomy_max",
     "tone_segment",
+    "log_amplitude_rate_hz",
 ]
 
 
@@ -460,9 +461,8 @@ _TONE_SEGMENTS = 16
 
 
 def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float) -> float:
-    """RMS rate [1/s] of ln|Σ y| over ``_TONE_SEGMENTS`` segments of equal weight (y = w·x·e^{−j2πft},
-    the tone at its fitted frequency): a line and a parabola in time, weighted by each segment's
-    ln-amplitude noise variance noise_var·Σw²/(2|Σy|²), each squared coefficient less its variance."""
+    """:func:`log_amplitude_rate_hz` of ln|Σ y| over ``_TONE_SEGMENTS`` segments of equal weight (y = w·x·e^{−j2πft},
+    the tone at its fitted frequency), each segment's ln-amplitude noise variance noise_var·Σw²/(2|Σy|²)."""
     w2 = weights**2
     cum = np.cumsum(w2)
     if cum[-1] <= 0:
@@ -475,11 +475,35 @@ def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise
     if np.any(energy <= 0) or np.any(power <= 0):
         return 0.0
     var = np.maximum(noise_var * energy / (2 * power), 1e-12)
-    design = np.column_stack([np.ones(_TONE_SEGMENTS), times, times**2])
+    duration = float(times[-1] - times[0]) * _TONE_SEGMENTS / (_TONE_SEGMENTS - 1)
+    return log_amplitude_rate_hz(np.log(np.sqrt(power) / energy), var, times, duration_s=duration)
+
+
+def log_amplitude_rate_hz(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float) -> float:
+    """RMS rate over a stretch of a phasor's log-amplitude [1/s], less what its noise gives it.
+
+    A line and a parabola a0 + a1·t + a2·t² are fitted to the segments' log-amplitudes by weighted
+    least squares; the rate's mean square over t uniform in ±D/2 is a1² + a2²·D²/3, each squared
+    coefficient taken less its variance (an unbiased estimate; 0 when below). A fading or beating
+    phasor's phase wanders at the same scale as its log-amplitude (the real and imaginary parts of one
+    analytic function): c·rate/(2πf) is then a speed error at carrier f (the whole-frame fit's
+    ``WholeFrameFit.amp_rate_hz``, the tone's ``ToneFit.amp_rate_hz``).
+
+    Parameters
+    ----------
+    log_amp : numpy.ndarray
+        ln|segment sum| of each segment.
+    var : numpy.ndarray
+        Its noise variance (> 0).
+    t_s : numpy.ndarray
+        The segments' times, about the stretch's middle [s].
+    duration_s : float
+        The stretch's duration D [s].
+    """
+    design = np.column_stack([np.ones(t_s.size), t_s, t_s**2])
     cov = np.linalg.inv(design.T @ (design / var[:, None]))
-    a = cov @ (design.T @ (np.log(np.sqrt(power) / energy) / var))
-    span2 = (float(times[-1] - times[0]) * _TONE_SEGMENTS / (_TONE_SEGMENTS - 1)) ** 2 / 3
-    ms = max(a[1] ** 2 - cov[1, 1], 0.0) + max(a[2] ** 2 - cov[2, 2], 0.0) * span2
+    a = cov @ (design.T @ (log_amp / var))
+    ms = max(a[1] ** 2 - cov[1, 1], 0.0) + max(a[2] ** 2 - cov[2, 2], 0.0) * duration_s**2 / 3
     return float(math.sqrt(ms))
 
 

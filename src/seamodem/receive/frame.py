@@ -51,6 +51,7 @@ __all__ = [
     "earlier_path_gap_s",
     "merged_image_delay_s",
     "two_carrier_sigma_mps",
+    "time_scale_delay_s",
     "unmodelled_sigmas",
 ]
 
@@ -293,11 +294,27 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
     # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
     tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
     sigma_v = math.hypot(fade, drift)
-    # the symbol instants' time scale is the carrier's (1 + v/c): a phase-rate error of the fading phasor
-    # scales them too, and the frame-start arrival, fitted to the timing over the whole frame (centroid
-    # D/2 in), moves by that error's v/c times D/2 (a Rician direct path at 12–17 dB: 2–6 mm off, σ 0.5 mm)
-    scale = sigma_v / c * dur / 2
-    return sigma_v, math.hypot(_K_MERGE * tilt, scale)
+    return sigma_v, math.hypot(_K_MERGE * tilt, time_scale_delay_s(sigma_v, config, sound_speed_mps=c))
+
+
+def time_scale_delay_s(sigma_v_mps: float, config: FrameConfig, *, sound_speed_mps: float) -> float:
+    """The frame-start arrival's σ [s] from a σ of the Doppler that sets the symbol instants' time scale.
+
+    The instants' time scale is the carrier's (1 + v/c): a phase-rate error (a fading phasor's, one the
+    two carriers show) scales them too, and the frame-start arrival, fitted to the timing over the whole
+    frame (centroid D/2 in), moves by that error's v/c times D/2 (a Rician direct path at 12–17 dB was
+    2–6 mm off with σ 0.5 mm without this term).
+
+    Parameters
+    ----------
+    sigma_v_mps : float
+        σ of the Doppler as a speed [m/s].
+    config : FrameConfig
+        The frame (its duration D).
+    sound_speed_mps : float
+        c [m/s].
+    """
+    return sigma_v_mps / sound_speed_mps * config.frame_duration_s / 2
 
 
 def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_tone: float, sigma_v: float,
@@ -657,8 +674,7 @@ class FrameMeasurer:
             sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone_lines, sigma, self.config) \
                 if source == "whole_frame" else 0.0
             sigma = math.hypot(sigma, sigma_2c)
-            # a phase-rate error is a time-scale error of the symbol instants too (as in unmodelled_sigmas)
-            sigma_tau_un = math.hypot(sigma_tau_un, sigma_2c / c * self.config.frame_duration_s / 2)
+            sigma_tau_un = math.hypot(sigma_tau_un, time_scale_delay_s(sigma_2c, self.config, sound_speed_mps=c))
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,

@@ -44,6 +44,7 @@ from numba import njit
 
 from ..config import FrameConfig
 from .bounds import gabor_bandwidth_hz
+from .doppler import log_amplitude_rate_hz
 
 __all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
 
@@ -94,12 +95,6 @@ class WholeFrameFit:
         what the timing CRLB gives it [s] (a diagnostic: the segments' timing
         estimator is not efficient, so noise alone leaves 2–4 mm of it at
         12 dB; the fit's ``sigma_delay_s`` already carries the scatter).
-    diagnostics : tuple of dict, optional
-        Per path, the raw statistics behind ``amp_rate_hz`` (for calibration
-        studies, e.g. ``benchmarks/bench_corpus.py``): the segments' sums
-        ``zs`` and times ``ts``, the log-amplitude's line-and-parabola
-        coefficients ``amp_coef`` and their covariance ``amp_cov``, the phase
-        fit's ``sigma_b`` and the drift ``beta``.
     """
 
     delays_s: np.ndarray
@@ -113,7 +108,6 @@ class WholeFrameFit:
     n_reference: int
     amp_rate_hz: np.ndarray | None = None
     tilt_delay_s: np.ndarray | None = None
-    diagnostics: tuple | None = None
     delay_scatter_s: np.ndarray | None = None
 
 
@@ -463,7 +457,7 @@ def fit_whole_frame(
         # the normal equations (3 × 3, times within ±D/2: well conditioned), their inverse the covariance's shape
         g_inv = np.linalg.inv(design.T @ (design * w[:, None]))
         coef = g_inv @ (design.T @ (w * phi))
-        last_phase[p] = (zs, ts, design, w, g_inv)
+        last_phase[p] = (zs, ts)
         resid = phi - design @ coef
         s2 = float(np.sum(w * resid**2) / (n_segments - 3))
         return coef, math.sqrt(max(s2 * g_inv[1, 1], 0.0))
@@ -514,25 +508,16 @@ def fit_whole_frame(
     amp_rate = np.zeros(n_paths)
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
-    diag: list = [None] * n_paths
     for p in range(n_paths):
-        zs, ts, design, w, g_inv = last_phase[p]
-        # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²)
+        zs, ts = last_phase[p]
+        # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²); each term of the
+        # rate less its noise expectation (not beyond 3 of its σ, as a gap between two estimates: that leaves
+        # 0 on most fading frames, and the fading direct path's Doppler 6–25σ off with it, the phase rate
+        # being a second, independent draw of the same scale), whose noise-only remainder adds at most the
+        # fit's own σ
         var = counts * noise_var / (2 * np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny))
-        la = np.log(np.maximum(np.abs(zs), np.finfo(float).tiny))
-        wa = 1.0 / var
-        cov = np.linalg.inv(design.T @ (design * wa[:, None]))
-        a = cov @ (design.T @ (wa * la))
-        # mean square of a1 + 2 a2 t over t uniform in ±D/2: a1² + a2² D²/3, less its noise expectation
-        d2 = config.frame_duration_s**2 / 3
-        # each term less its noise expectation (not beyond 3 of its σ, as a gap between two estimates: that
-        # leaves 0 on most fading frames, and the fading direct path's Doppler 6–25σ off with it, the phase
-        # rate being a second, independent draw of the same scale): an unbiased estimate of the rate's
-        # mean square, whose noise-only remainder adds at most the fit's own σ
-        ms = max(a[1] ** 2 - cov[1, 1], 0.0) + max(a[2] ** 2 - cov[2, 2], 0.0) * d2
-        amp_rate[p] = math.sqrt(max(ms, 0.0))
-        diag[p] = dict(zs=zs.copy(), ts=ts.copy(), amp_coef=a.copy(), amp_cov=cov.copy(), phase_cov_shape=g_inv.copy(), sigma_b=float(sigma_b[p]),
-                       beta=float(beta[p]))
+        amp_rate[p] = log_amplitude_rate_hz(np.log(np.maximum(np.abs(zs), np.finfo(float).tiny)), var, ts,
+                                            duration_s=config.frame_duration_s)
         d_seg, wt = last_timing[p]
         dm = float(np.sum(wt * d_seg) / np.sum(wt))
         spread2 = float(np.sum(wt * (d_seg - dm) ** 2) / np.sum(wt))
@@ -580,5 +565,4 @@ def fit_whole_frame(
         amp_rate_hz=amp_rate[order],
         delay_scatter_s=scatter[order],
         tilt_delay_s=tilt[order],
-        diagnostics=tuple(diag[i] for i in order),
     )
