@@ -378,14 +378,15 @@ class ToneFit:
 _LINE_FALSE_ALARM = 0.01
 
 
-def _line_spread_hz(resid_w: np.ndarray, wx: np.ndarray, grid: np.ndarray, n_fft: int, f_hz: float, *,
+def _line_spread_hz(resid_w: np.ndarray, spectrum: np.ndarray, grid: np.ndarray, n_fft: int, f_hz: float, *,
                     search_hz: float) -> float:
     """√(Σ (P_res − floor)·(f − f̂)² / E_line) over the residual periodogram's bins that stand out of the
-    noise, E_line the energy the fitted line took out (the periodogram of the weighted samples less
-    the residual's); the floor is the residual periodogram's median / ln 2 (an exponential's mean)."""
+    noise, E_line the energy the fitted line took out (the periodogram of the weighted samples, whose
+    magnitude ``spectrum`` the ML search computed on ``grid``, less the residual's); the floor is the
+    residual periodogram's median / ln 2 (an exponential's mean)."""
     inside = np.abs(grid) <= search_hz
     p_res = np.abs(np.fft.fft(resid_w, n_fft))[inside] ** 2
-    p_all = np.abs(np.fft.fft(wx, n_fft))[inside] ** 2
+    p_all = spectrum[inside] ** 2
     floor = float(np.median(p_res)) / math.log(2)
     e_line = float(np.sum(p_all) - np.sum(p_res))
     if not (floor > 0 and e_line > 0):
@@ -447,7 +448,7 @@ def tone_frequency_ml(
     resid = x[inside] - amplitude * basis[inside]
     variance = float(np.mean(np.abs(resid) ** 2))
     c_n0 = abs(amplitude) ** 2 * noise_bandwidth_hz / max(variance, np.finfo(float).tiny)
-    spread = _line_spread_hz(weights * (x - amplitude * basis), wx, grid, n_fft, f, search_hz=search_hz)
+    spread = _line_spread_hz(weights * (x - amplitude * basis), power, grid, n_fft, f, search_hz=search_hz)
     # the white noise's variance from the residual's sample-to-sample differences: a fading tone's slow
     # amplitude changes, which the residual also holds, are what the rate is to measure, not noise
     white = float(np.mean(np.abs(np.diff(resid)) ** 2)) / 2 if resid.size > 1 else variance
