@@ -61,7 +61,9 @@ def _fit(x, ta):
                          sound_speed_mps=C)
     xs, t, w = tone_segment(tone, plan.fs_tone, 0.0, config=CFG, t_start_s=ta, scale=1 + float(wf.v_mps[0]) / C)
     tf = tone_frequency_ml(xs, t, w, search_hz=plan.tone.passband_hz, noise_bandwidth_hz=plan.noise_bandwidth_hz("tone"))
-    sigma_tone = math.hypot(float(tone_velocity_crlb_mps(CFG, tf.c_n0_hz, sound_speed_mps=C)), tf.spread_hz * C / CFG.tone_hz)
+    # the σ of the tone's noise, as the receiver gives the two-carrier check (its line spread around a fading
+    # line is the wander the check measures)
+    sigma_tone = float(tone_velocity_crlb_mps(CFG, tf.c_n0_hz, sound_speed_mps=C))
     return wf, tf.offset_hz * C / CFG.tone_hz, sigma_tone
 
 
@@ -81,9 +83,10 @@ def test_fading_direct_path_sigma_covers_its_doppler_and_arrival_errors():
         wf, v_tone, sigma_tone = _fit(x, ta)
         sv_un, st_un = unmodelled_sigmas(wf, 0, CFG, sound_speed_mps=C)
         sv = math.hypot(float(wf.sigma_v_mps[0]), sv_un)
-        s2c = two_carrier_sigma_mps(wf, 0, v_tone, sigma_tone, sv, CFG)
+        s2c = two_carrier_sigma_mps(wf, 0, v_tone, sigma_tone, sv, CFG, sound_speed_mps=C)
         ev = float(wf.v_mps[0]) - V
         zv.append(ev / math.hypot(sv, s2c))
+
         zv_own.append(ev / float(wf.sigma_v_mps[0]))
         st = math.hypot(float(wf.sigma_delay_s[0]), st_un, s2c / C * CFG.frame_duration_s / 2)
         zt.append((float(wf.delays_s[0]) - ta) / st)

@@ -317,8 +317,12 @@ def time_scale_delay_s(sigma_v_mps: float, config: FrameConfig, *, sound_speed_m
     return sigma_v_mps / sound_speed_mps * config.frame_duration_s / 2
 
 
+#: the largest pull of a tone's peak by a line Δf away beyond its resolution, over a·Δf·(Δf·T)⁻²
+TONE_PULL_ENVELOPE = 0.3
+
+
 def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_tone: float, sigma_v: float,
-                          config: FrameConfig) -> float:
+                          config: FrameConfig, *, sound_speed_mps: float = 1500.0) -> float:
     """σ term [m/s] of the direct path's whole-frame Doppler from its gap to the tone's, as two carriers see it.
 
     A Doppler shift is the same speed at every carrier; a phase that wanders
@@ -329,9 +333,16 @@ def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_to
     for jmse2024): the dual-frequency argument of GNSS's ionosphere-free
     combination. The tone also sums the echoes, which pull it towards their
     Doppler: the resolved paths' power-weighted Doppler centroid is taken
-    out of the gap and their spread counts as the tone's. The gap's square
-    less its noise expectation (both estimates' variances), times the ratio,
-    is this term's square (0 without a tone).
+    out of the gap and their spread counts as the tone's, each path weighted
+    by how much it can pull the tone's peak (in full within the tone's
+    resolution 1/T, as ``TONE_PULL_ENVELOPE``/(Δf·T)² in amplitude beyond). The gap's square less its noise
+    expectation (both estimates' variances), times the ratio, is this term's
+    square (0 without a tone).
+
+    The tone's σ here is its noise only (CRLB, impulses): the spectral
+    spread around a fading line is the same wander the data band sees, so it
+    is what the gap measures, not noise to it (counted as noise, it hid
+    wanders of 20–30 mm/s on fading single paths).
 
     Parameters
     ----------
@@ -340,17 +351,25 @@ def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_to
     first : int
         The direct path's index in it.
     v_tone, sigma_tone : float
-        The tone's speed and σ (with its line spread) [m/s].
+        The tone's speed and the σ of its noise [m/s].
     sigma_v : float
         The direct path's σ so far [m/s].
     config : FrameConfig
-        Carrier and tone frequencies.
+        Carrier and tone frequencies, frame duration (the tone's).
+    sound_speed_mps : float
+        Sound speed [m/s].
     """
     if not (math.isfinite(v_tone) and math.isfinite(sigma_tone)):
         return 0.0
     power = np.abs(np.asarray(wf.amplitudes)) ** 2
     w = power / max(float(power.sum()), np.finfo(float).tiny)
     dv = np.asarray(wf.v_mps, dtype=float) - float(wf.v_mps[first])
+    # a line of amplitude a at Δf pulls the peak of a tone of length T by ~0.7·a·Δf (RMS over its phase)
+    # inside the resolution, and by at most 0.3·a·Δf/(Δf·T)² beyond (a sidelobe's slope: the envelope of the
+    # exact pull, tests/receive/test_two_carrier.py): power weights times min(1, 0.09/(Δf·T)⁴). Weak fitted
+    # paths at −0.5 m/s counted in full gave a 9 mm/s 'noise' that hid a 26 mm/s wander on a fading path
+    x = np.abs(dv) * config.tone_hz / sound_speed_mps * config.frame_duration_s
+    w = w * np.minimum(1.0, TONE_PULL_ENVELOPE**2 / np.maximum(x, 1e-12) ** 4)
     centroid = float(np.sum(w * dv))
     spread2 = float(np.sum(w * (dv - centroid) ** 2))
     gap = float(wf.v_mps[first]) + centroid - v_tone
@@ -618,13 +637,12 @@ class FrameMeasurer:
         v_tone = m.v_tone_ml_mps
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
+        sigma_tone_noise = sigma_tone  # the two-carrier check's: lines and wander are what it measures
         # the tone sums every path: echoes with their own Doppler are lines of their own in its band, which
         # pull the fitted one or are the one taken (the stronger); their spread is the tone's honest scale
         sigma_tone = math.hypot(sigma_tone, m.tone.spread_hz * c / self.config.tone_hz)
         # and a fading tone (or one beating with a merged echo): its log-amplitude rate, the same scale as
         # its phase's wander (as the whole-frame fit's term)
-        # (the two-carrier check below models that wander as the data band's too: not noise to it)
-        sigma_tone_lines = sigma_tone
         sigma_tone = math.hypot(sigma_tone, m.tone.amp_rate_hz * c / (2 * math.pi * self.config.tone_hz))
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
@@ -671,7 +689,8 @@ class FrameMeasurer:
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
             # (a fit on decisions has the tone as its referee already, above)
-            sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone_lines, sigma, self.config) \
+            sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone_noise, sigma, self.config,
+                                             sound_speed_mps=c) \
                 if source == "whole_frame" else 0.0
             sigma = math.hypot(sigma, sigma_2c)
             sigma_tau_un = math.hypot(sigma_tau_un, time_scale_delay_s(sigma_2c, self.config, sound_speed_mps=c))
