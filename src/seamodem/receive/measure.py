@@ -17,7 +17,7 @@ from ..config import FrameConfig
 from .detect import Detection, doppler_bin_spacing_hz
 from .doppler import PilotFit, ToneFit, fit_pilot, tone_frequency_ml, tone_segment, tone_track_eq9
 from .frontend import FrontEndPlan
-from .multipath import PathFit, direct_path_doppler, find_echoes, fit_paths
+from .multipath import PathFit, direct_path_doppler, find_echoes, find_precursors, fit_paths
 
 __all__ = ["FrameMeasurement", "measure_frame", "in_band_snr_db", "impulse_excess", "frame_span_s", "NOISE_GAP_S", "NOISE_WINDOW_S"]
 
@@ -121,6 +121,8 @@ def measure_frame(
         eps=fit.v_mps / c,
         es_n0=fit.es_n0,
     )
+    paths = find_precursors(bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, paths=paths,
+                            t_start_s=fit.t_start_s, eps=fit.v_mps / c, es_n0=fit.es_n0)
     echoes = None
     if len(paths.delays_s) > 1:
         # unresolved echoes pull the single-path fit towards them: take the first path's

@@ -417,6 +417,45 @@ def find_echoes(
     return PathFit(delays_s=found.delays_s, amplitudes=found.amplitudes, first_s=first_s)
 
 
+def find_precursors(
+    r: np.ndarray,
+    fs: float,
+    t0_s: float,
+    *,
+    config: FrameConfig,
+    pilot: np.ndarray,
+    paths: PathFit,
+    t_start_s: float,
+    eps: float,
+    es_n0: float,
+    half_window_symbols: float = 12.0,
+    max_precursors: int = 2,
+) -> PathFit:
+    """``paths`` with the paths up to a pilot's length (Np·T) *before* the arrival fit's window added.
+
+    The detector locks on the strongest correlation peak, and the arrival fit
+    looks ± 12 symbols around it. When the direct path is weaker than an echo
+    over the pilot (impulses blanked in it, a fade) and the echo lies more
+    than 12 symbols behind it (a bottom echo 2 ms late at 370 m in 27 m of
+    water), the echo is taken as the direct path, metres off, with nothing in
+    the fit to say so. :func:`fit_paths` is run again from ``paths`` over
+    [arrival − Np·T, arrival + 12 T] with the same tests for a new path (a
+    share of the strongest, 3.5 noise deviations); ``paths`` itself is
+    returned when it finds none, so a frame without a precursor is measured
+    as before. A precursor at least 0.3 of the strongest becomes the first
+    path; a weaker one is left for the arrival's σ
+    (:func:`~seamodem.receive.frame.earlier_path_gap_s`).
+    """
+    n_p = len(pilot)
+    T = config.symbol_period_s / (1 + eps)
+    found = fit_paths(r, fs, t0_s, config=config, pilot=pilot, t_start_s=t_start_s, eps=eps, es_n0=es_n0,
+                      initial_delays_s=paths.delays_s, max_paths=len(paths.delays_s) + max_precursors,
+                      window_s=(t_start_s - n_p * T, t_start_s + half_window_symbols * T))
+    if len(found.delays_s) == len(paths.delays_s):
+        return paths
+    return found
+
+
 def _guard_es_n0(r, fs, t0_s, *, config: FrameConfig, pilot, y, first_s: float, eps: float) -> float:
     """Es/N0 of the first path: |A|² from its pilot outputs ``y``, the noise from the leading guard.
 
