@@ -69,8 +69,19 @@ def test_the_depths_alone_take_the_profile_of_a_simulated_recording(tmp_path):
     assert all(abs(r.horizontal_range_m - 300.0) < 0.01 for r in recs)
 
 
-def test_the_depths_without_any_profile_are_refused(beacon, tmp_path, capsys):
-    assert main(["rx", str(beacon[2]), "-o", str(tmp_path / "m.csv"), "-q", "--beacon-depth", "25",
-                 "--vehicle-depth", "5"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "has no [water] profile" in err
+def test_the_depths_without_any_profile_give_the_merged_image_sigma(beacon, tmp_path):
+    # no profile anywhere: a straight ray at c, and the depths still set the arrival's σ for a surface image
+    # merged with the direct path: 2·2·3/(R·c) = 27 µs at about 300 m, 4 cm, below 1/B = 112 µs
+    plain, deep = tmp_path / "plain.csv", tmp_path / "deep.csv"
+    assert main(["rx", str(beacon[2]), "-o", str(plain), "-q"]) == 0
+    assert main(["rx", str(beacon[2]), "-o", str(deep), "-q", "--beacon-depth", "2", "--vehicle-depth", "3"]) == 0
+    (recs, _), (deep_recs, header) = read_measurements(plain), read_measurements(deep)
+    assert header["beacon_depth_m"] == 2.0 and header["vehicle_depth_m"] == 3.0
+    assert "sound_speed_profile" not in header
+    for r, d in zip(recs, deep_recs, strict=True):
+        assert d.range_m == r.range_m
+        image = 2 * 2.0 * 3.0 / r.range_m  # c·δ [m]
+        assert r.sigma_range_m < 0.2 * image
+        assert d.sigma_range_m == pytest.approx(np.hypot(r.sigma_range_m, image), rel=0.01)
+
+

@@ -67,9 +67,10 @@ def add_parser(sub) -> None:
                                "horizontal_range_m its horizontal range, c for Doppler the profile's at the vehicle "
                                "(needs --beacon-depth and --vehicle-depth; with the depths alone, a simulated "
                                "recording's [water] profile from its sidecar)")
-    g.add_argument("--beacon-depth", type=float, metavar="M", help="beacon depth [m], with --sound-speed-profile (also the arrival's σ term for a "
-                        "surface image merged with the direct path)")
-    g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m], with --sound-speed-profile")
+    g.add_argument("--beacon-depth", type=float, metavar="M",
+                   help="beacon depth [m]: the ray's end with --sound-speed-profile; with --vehicle-depth, also (alone "
+                        "too) the arrival's σ term for a surface image merged with the direct path")
+    g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m] (as --beacon-depth)")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
         "--turnaround",
@@ -215,8 +216,7 @@ def _water_profile(args, profile, sidecar: dict | None):
     if profile is None:
         traced = (((sidecar or {}).get("channel") or {}).get("model") or {}).get("sound_speed_profile")
         if traced is None:
-            raise SeamodemError("beacon-depth: depths turn travel time into range along a ray: give "
-                                "--sound-speed-profile (the recording's sidecar has no [water] profile)")
+            return None  # the depths alone: a straight ray at c, and the merged surface image's σ term
         from ..water import SoundSpeedProfile
 
         profile = SoundSpeedProfile.from_dict(traced, where="sidecar channel.model.sound_speed_profile")
@@ -248,9 +248,9 @@ def _settings(args, sidecar: dict | None, profile=None):
         decode=args.decode,
         turbo_passes=args.turbo_passes,
         blank_impulses=args.blank_impulses,
-        # with a profile, the depths also give the arrival's σ its merged-surface-image term
-        beacon_depth_m=args.beacon_depth if profile is not None else None,
-        vehicle_depth_m=args.vehicle_depth if profile is not None else None,
+        # the depths give the arrival's σ its merged-surface-image term (with or without a profile)
+        beacon_depth_m=args.beacon_depth,
+        vehicle_depth_m=args.vehicle_depth,
     ), origin
 
 
