@@ -501,11 +501,25 @@ def log_amplitude_rate_hz(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray,
     duration_s : float
         The stretch's duration D [s].
     """
+    return float(math.sqrt(_log_amplitude_rate_terms(log_amp, var, t_s, duration_s=duration_s, clip=True)))
+
+
+def log_amplitude_rate_ms(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float) -> float:
+    """:func:`log_amplitude_rate_hz`'s mean square [1/s²] unclipped: each term less its noise expectation,
+    negative when the noise gave more than the expectation. An unbiased estimate of the rate's mean square,
+    so that the average over frames is one too (``FrameMeasurer`` pools it; the clipped per-frame rate would
+    average to a positive scale on a channel that does not fade)."""
+    return _log_amplitude_rate_terms(log_amp, var, t_s, duration_s=duration_s, clip=False)
+
+
+def _log_amplitude_rate_terms(log_amp, var, t_s, *, duration_s: float, clip: bool) -> float:
     design = np.column_stack([np.ones(t_s.size), t_s, t_s**2])
     cov = np.linalg.inv(design.T @ (design / var[:, None]))
     a = cov @ (design.T @ (log_amp / var))
-    ms = max(a[1] ** 2 - cov[1, 1], 0.0) + max(a[2] ** 2 - cov[2, 2], 0.0) * duration_s**2 / 3
-    return float(math.sqrt(ms))
+    slope, curve = a[1] ** 2 - cov[1, 1], a[2] ** 2 - cov[2, 2]
+    if clip:
+        slope, curve = max(slope, 0.0), max(curve, 0.0)
+    return float(slope + curve * duration_s**2 / 3)
 
 
 def tone_track_eq9(

@@ -44,7 +44,7 @@ from numba import njit
 
 from ..config import FrameConfig
 from .bounds import gabor_bandwidth_hz
-from .doppler import log_amplitude_rate_hz
+from .doppler import log_amplitude_rate_hz, log_amplitude_rate_ms
 
 __all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
 
@@ -82,6 +82,10 @@ class WholeFrameFit:
         A path that fades, or that an unresolved echo beats with, changes
         amplitude: for a Rician or two-phasor sum the log-amplitude rate and
         the phase-rate error (a Doppler error) have the same scale.
+    amp_rate_ms : numpy.ndarray
+        The same rate's mean square [1/s²], each term less its noise
+        expectation but not clipped at 0: an unbiased estimate, which the
+        receiver averages over frames (``FrameMeasurer``).
     tilt_delay_s : numpy.ndarray
         The direct path's channel shape across its band as a delay [s] (0 for
         the other paths): the RMS over the band of d ln|H|/df, with the phase's
@@ -107,6 +111,7 @@ class WholeFrameFit:
     sigma_delay_s: np.ndarray
     n_reference: int
     amp_rate_hz: np.ndarray | None = None
+    amp_rate_ms: np.ndarray | None = None
     tilt_delay_s: np.ndarray | None = None
     delay_scatter_s: np.ndarray | None = None
 
@@ -506,6 +511,7 @@ def fit_whole_frame(
     crlb_d = 1.0 / (2 * np.pi * gabor_bandwidth_hz(config.symbol_rate_hz, config.rolloff)
                     * np.sqrt(2 * n_ref * np.maximum(es_n0, 1e-30)))
     amp_rate = np.zeros(n_paths)
+    amp_rate_ms = np.zeros(n_paths)
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
     for p in range(n_paths):
@@ -516,8 +522,9 @@ def fit_whole_frame(
         # being a second, independent draw of the same scale), whose noise-only remainder adds at most the
         # fit's own σ
         var = counts * noise_var / (2 * np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny))
-        amp_rate[p] = log_amplitude_rate_hz(np.log(np.maximum(np.abs(zs), np.finfo(float).tiny)), var, ts,
-                                            duration_s=config.frame_duration_s)
+        log_amp = np.log(np.maximum(np.abs(zs), np.finfo(float).tiny))
+        amp_rate[p] = log_amplitude_rate_hz(log_amp, var, ts, duration_s=config.frame_duration_s)
+        amp_rate_ms[p] = log_amplitude_rate_ms(log_amp, var, ts, duration_s=config.frame_duration_s)
         d_seg, wt = last_timing[p]
         dm = float(np.sum(wt * d_seg) / np.sum(wt))
         spread2 = float(np.sum(wt * (d_seg - dm) ** 2) / np.sum(wt))
@@ -563,6 +570,7 @@ def fit_whole_frame(
         sigma_delay_s=np.maximum(sigma_d, crlb_d)[order],
         n_reference=int(n_ref),
         amp_rate_hz=amp_rate[order],
+        amp_rate_ms=amp_rate_ms[order],
         delay_scatter_s=scatter[order],
         tilt_delay_s=tilt[order],
     )
