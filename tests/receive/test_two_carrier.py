@@ -2,8 +2,9 @@
 
 The data band at f0 and the tone at f_t see a carrier-independent phase wander as speed errors in the
 ratio f_t / f0, so the data band's error is f_t/(f_t − f0) times their gap. Echoes pull the tone's peak,
-which the check counts as noise: by how much is the exact peak of a rectangular tone plus one line,
-computed here by maximising its spectrum.
+which the check counts as noise: beyond the tone's resolution by the envelope of the exact peak of a
+rectangular tone plus one line, computed here by maximising its spectrum; within it by the phase rate
+of the two phasors' sum.
 """
 
 from __future__ import annotations
@@ -74,10 +75,23 @@ def test_a_weak_path_with_its_own_doppler_does_not_hide_the_wander():
 
 
 def test_an_unresolved_echo_pulling_the_tone_is_not_read_as_wander():
-    # an echo at 60 % amplitude 0.05 m/s away (Δf·T = 0.2, inside the resolution): the tone is pulled towards
-    # it by about its centroid, which the check takes out; no wander, so the term stays small beside the pull
+    # an echo at 60 % amplitude 0.05 m/s away (Δf·T = 0.2, inside the resolution) pulls the tone by up to
+    # ρ/(1 − ρ)·Δv = 75 mm/s near cancellation (the phase rate of 1 + ρe^{jψ}); no wander: a gap the echo can
+    # make is not read as one
     v = 1.0
-    w = 0.36 / 1.36
-    v_tone = v + w * (-0.05)  # the tone at the power-weighted centroid
-    s = two_carrier_sigma_mps(_fit([v, v - 0.05], [1.0, 0.6]), 0, v_tone, 0.0005, 0.0005, CFG, sound_speed_mps=C)
-    assert s < 0.25 * abs(RATIO) * abs(v_tone - v)
+    for psi in np.linspace(0, 2 * np.pi, 13):
+        w = 0.6 * np.exp(1j * psi) / (1 + 0.6 * np.exp(1j * psi))
+        v_tone = v + (-0.05) * w.real  # the sum's phase rate, the echo's relative phase ψ still over the tone
+        s = two_carrier_sigma_mps(_fit([v, v - 0.05], [1.0, 0.6]), 0, v_tone, 0.0005, 0.0005, CFG,
+                                  sound_speed_mps=C)
+        assert s == 0.0, (psi, v_tone - v)
+
+
+def test_a_gap_beyond_what_the_echoes_can_make_is_wander():
+    # the same echo, and a wander of 300 mm/s at the data carrier (420 at the tone): a gap of 120 mm/s,
+    # beyond the 75 the echo can make
+    e = 0.300
+    s = two_carrier_sigma_mps(_fit([1.0 + e, 0.95 + e], [1.0, 0.6]), 0, 1.0 + e * CFG.carrier_hz / CFG.tone_hz,
+                              0.0005, 0.0005, CFG, sound_speed_mps=C)
+    reach = 0.6 / 0.4 * 0.05
+    assert s == pytest.approx(abs(RATIO) * math.sqrt((0.4 * e) ** 2 - 2 * 0.0005**2 - reach**2), rel=1e-6)

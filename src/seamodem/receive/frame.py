@@ -340,13 +340,13 @@ def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_to
     proportional to the carrier. With the data band at f0 and the tone at
     f_t, the data's error is f_t / (f_t − f0) times the gap v − v_tone (−2.5
     for jmse2024): the dual-frequency argument of GNSS's ionosphere-free
-    combination. The tone also sums the echoes, which pull it towards their
-    Doppler: the resolved paths' power-weighted Doppler centroid is taken
-    out of the gap and their spread counts as the tone's, each path weighted
-    by how much it can pull the tone's peak (in full within the tone's
-    resolution 1/T, as ``TONE_PULL_ENVELOPE``/(Δf·T)² in amplitude beyond). The gap's square less its noise
-    expectation (both estimates' variances), times the ratio, is this term's
-    square (0 without a tone).
+    combination. The tone also sums the echoes, which pull it: by up to
+    ρ/|1 − ρ|·Δv for a path of relative amplitude ρ, Δv away, within the
+    tone's resolution 1/T (the phase rate of 1 + ρe^{jψ} near cancellation),
+    by ``TONE_PULL_ENVELOPE``/(Δf·T)² of that beyond. The sum over the fitted
+    paths is a gap the echoes alone can make: it counts as noise. The gap's
+    square less its noise expectation (both estimates' variances and that
+    pull), times the ratio, is this term's square (0 without a tone).
 
     The tone's σ here is its noise only (CRLB, impulses): the spectral
     spread around a fading line is the same wander the data band sees, so it
@@ -370,21 +370,23 @@ def two_carrier_sigma_mps(wf: WholeFrameFit, first: int, v_tone: float, sigma_to
     """
     if not (math.isfinite(v_tone) and math.isfinite(sigma_tone)):
         return 0.0
-    power = np.abs(np.asarray(wf.amplitudes)) ** 2
-    w = power / max(float(power.sum()), np.finfo(float).tiny)
+    amps = np.abs(np.asarray(wf.amplitudes))
+    rho = amps / max(float(amps[first]), np.finfo(float).tiny)
     dv = np.asarray(wf.v_mps, dtype=float) - float(wf.v_mps[first])
-    # a line of amplitude a at Δf pulls the peak of a tone of length T by ~0.7·a·Δf (RMS over its phase)
-    # inside the resolution, and by at most 0.3·a·Δf/(Δf·T)² beyond (a sidelobe's slope: the envelope of the
-    # exact pull, tests/receive/test_two_carrier.py): power weights times min(1, 0.09/(Δf·T)⁴). Weak fitted
-    # paths at −0.5 m/s counted in full gave a 9 mm/s 'noise' that hid a 26 mm/s wander on a fading path
+    # an echo of relative amplitude ρ, Δv away, unresolved by the tone (Δf·T ≪ 1), moves the sum's phase rate
+    # by Δv·Re(w), w = ρe^{jψ}/(1 + ρe^{jψ}) at their relative phase ψ: up to ρ/|1 − ρ|·Δv near cancellation
+    # (capped at 10: equal paths), of either sign; beyond the resolution its line stands apart, the pull
+    # falling as the envelope 0.3/(Δf·T)² of the exact pull (tests/receive/test_two_carrier.py). Their sum is
+    # the gap the echoes alone can make. (As RMS rather than bound, a 0.89 echo 9 mm/s away in the demo's
+    # channel left gaps of 40–120 mm/s read as wander, σ 0.07 → 0.09 cm/s where the errors are 0.05.)
     x = np.abs(dv) * config.tone_hz / sound_speed_mps * config.frame_duration_s
-    w = w * np.minimum(1.0, TONE_PULL_ENVELOPE**2 / np.maximum(x, 1e-12) ** 4)
-    centroid = float(np.sum(w * dv))
-    spread2 = float(np.sum(w * (dv - centroid) ** 2))
-    gap = float(wf.v_mps[first]) + centroid - v_tone
+    reach = np.minimum(rho / np.maximum(np.abs(1.0 - rho), 0.1), 10.0)
+    reach[first] = 0.0
+    pull = float(np.sum(reach * np.abs(dv) * np.minimum(1.0, TONE_PULL_ENVELOPE / np.maximum(x, 1e-12) ** 2)))
+    gap = float(wf.v_mps[first]) - v_tone
     # less its noise expectation (as the log-amplitude rate): beyond 3 σ only, a gap just inside it would
     # leave the data's error at up to 2.5 × 3 of the tone's σ unseen (8σ on an analytic fading path)
-    excess = gap**2 - (sigma_tone**2 + sigma_v**2 + spread2)
+    excess = gap**2 - (sigma_tone**2 + sigma_v**2 + pull**2)
     ratio = config.tone_hz / (config.tone_hz - config.carrier_hz)
     return abs(ratio) * math.sqrt(max(excess, 0.0))
 
