@@ -364,6 +364,10 @@ class ToneFit:
         parabola through 16 segments' ln|Σ w x e^{−j2πft}|, each term less its
         noise expectation): a fading or beating tone's phase wanders at the
         same scale, a speed error c·rate/(2π f_pt).
+    amp_rate_ms : float
+        The same rate's mean square [1/s²], each term less its noise
+        expectation but not clipped at 0 (unbiased: the receiver averages it
+        over frames, :func:`log_amplitude_rate_ms`).
     """
 
     offset_hz: float
@@ -371,6 +375,7 @@ class ToneFit:
     c_n0_hz: float
     spread_hz: float = 0.0
     amp_rate_hz: float = 0.0
+    amp_rate_ms: float = 0.0
 
 
 #: a residual spectral line counts when its periodogram bin stands above the noise floor by ln(bins / this):
@@ -452,32 +457,35 @@ def tone_frequency_ml(
     # the white noise's variance from the residual's sample-to-sample differences: a fading tone's slow
     # amplitude changes, which the residual also holds, are what the rate is to measure, not noise
     white = float(np.mean(np.abs(np.diff(resid)) ** 2)) / 2 if resid.size > 1 else variance
-    rate = _amplitude_rate_hz(wx * np.exp(-2j * np.pi * f * tc), weights, tc, white)
+    rate, rate_ms = _amplitude_rate_hz(wx * np.exp(-2j * np.pi * f * tc), weights, tc, white)
     return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0), spread_hz=spread,
-                   amp_rate_hz=rate)
+                   amp_rate_hz=rate, amp_rate_ms=rate_ms)
 
 
 #: segments of the tone whose log-amplitudes give its rate (``ToneFit.amp_rate_hz``)
 _TONE_SEGMENTS = 16
 
 
-def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float) -> float:
-    """:func:`log_amplitude_rate_hz` of ln|Σ y| over ``_TONE_SEGMENTS`` segments of equal weight (y = w·x·e^{−j2πft},
-    the tone at its fitted frequency), each segment's ln-amplitude noise variance noise_var·Σw²/(2|Σy|²)."""
+def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float) -> tuple[float, float]:
+    """:func:`log_amplitude_rate_hz` (and :func:`log_amplitude_rate_ms`) of ln|Σ y| over ``_TONE_SEGMENTS``
+    segments of equal weight (y = w·x·e^{−j2πft}, the tone at its fitted frequency), each segment's
+    ln-amplitude noise variance noise_var·Σw²/(2|Σy|²)."""
     w2 = weights**2
     cum = np.cumsum(w2)
     if cum[-1] <= 0:
-        return 0.0
+        return 0.0, 0.0
     seg = np.minimum((cum / cum[-1] * _TONE_SEGMENTS).astype(int), _TONE_SEGMENTS - 1)
     sums = np.bincount(seg, y.real, _TONE_SEGMENTS) + 1j * np.bincount(seg, y.imag, _TONE_SEGMENTS)
     energy = np.bincount(seg, w2, _TONE_SEGMENTS)
     times = np.bincount(seg, w2 * tc, _TONE_SEGMENTS) / np.maximum(energy, np.finfo(float).tiny)
     power = np.abs(sums) ** 2
     if np.any(energy <= 0) or np.any(power <= 0):
-        return 0.0
+        return 0.0, 0.0
     var = np.maximum(noise_var * energy / (2 * power), 1e-12)
     duration = float(times[-1] - times[0]) * _TONE_SEGMENTS / (_TONE_SEGMENTS - 1)
-    return log_amplitude_rate_hz(np.log(np.sqrt(power) / energy), var, times, duration_s=duration)
+    log_amp = np.log(np.sqrt(power) / energy)
+    return (log_amplitude_rate_hz(log_amp, var, times, duration_s=duration),
+            log_amplitude_rate_ms(log_amp, var, times, duration_s=duration))
 
 
 def log_amplitude_rate_hz(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float) -> float:
