@@ -261,19 +261,35 @@ def _record_sigma(meas, column, given, default, floor, name) -> tuple[np.ndarray
     return np.full(n, float(default)), "default (records carry none)"
 
 
-def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, use_vr, smooth, lag_s, config,
-                    range_floor_m, v_r_floor_mps, sigma_range_m, sigma_v_r_mps, start_sigma_m, fixes, filter,
-                    depths, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
-    from .inertial import InertialConfig, add_bearings, add_fixes, build_nodes, run_filter, state_names
-    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
+def inertial_config(config, *, start_sigma_m, range_floor_m, v_r_floor_mps):
+    """The inertial filter's configuration with the start σ, once the floors and the start σ are checked."""
+    from .inertial import InertialConfig
 
     for name, value in (("range_floor_m", range_floor_m), ("v_r_floor_mps", v_r_floor_mps)):
         if not (value is not None and math.isfinite(value) and value >= 0):
             raise ConfigError(name, f"must be a finite number >= 0, got {value!r}")
     _check_positive("start_sigma_m", start_sigma_m)
+    return replace(config if config is not None else InertialConfig(), p0_position_m=float(start_sigma_m))
+
+
+def bearing_sigma(meas: dict, bearing_floor_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """The records' ``azimuth_body_rad`` and the σ used for each: the record's (or
+    :data:`DEFAULT_SIGMA_BEARING_RAD`) raised to ``bearing_floor_rad``."""
+    az = np.asarray(meas["azimuth_body_rad"], dtype=float)
+    sb = np.asarray(meas.get("sigma_azimuth_body_rad", np.full(az.size, np.nan)), dtype=float)
+    return az, np.maximum(np.where(np.isfinite(sb) & (sb > 0), sb, DEFAULT_SIGMA_BEARING_RAD), bearing_floor_rad)
+
+
+def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, use_vr, smooth, lag_s, config,
+                    range_floor_m, v_r_floor_mps, sigma_range_m, sigma_v_r_mps, start_sigma_m, fixes, filter,
+                    depths, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
+    from .inertial import add_bearings, add_fixes, build_nodes, run_filter, state_names
+    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
+
     if smooth == "fixed-lag":
         _check_positive("lag_s", lag_s)
-    cfg = replace(config if config is not None else InertialConfig(), p0_position_m=float(start_sigma_m))
+    cfg = inertial_config(config, start_sigma_m=start_sigma_m, range_floor_m=range_floor_m,
+                          v_r_floor_mps=v_r_floor_mps)
     t_imu = np.asarray(imu["t_s"], dtype=float)
     if t_imu.size < 2 or np.any(np.diff(t_imu) <= 0):
         raise InputFileError("IMU samples: need at least two, with strictly increasing t_s")
@@ -308,9 +324,7 @@ def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, 
     if not (bearing_floor_rad is not None and math.isfinite(bearing_floor_rad) and bearing_floor_rad >= 0):
         raise ConfigError("bearing_floor_rad", f"must be a finite number >= 0, got {bearing_floor_rad!r}")
     if use_bearing and "azimuth_body_rad" in meas and np.isfinite(meas["azimuth_body_rad"]).any():
-        az = np.asarray(meas["azimuth_body_rad"], dtype=float)
-        sb = np.asarray(meas.get("sigma_azimuth_body_rad", np.full(az.size, np.nan)), dtype=float)
-        sb = np.maximum(np.where(np.isfinite(sb) & (sb > 0), sb, DEFAULT_SIGMA_BEARING_RAD), bearing_floor_rad)
+        az, sb = bearing_sigma(meas, bearing_floor_rad)
         nodes = add_bearings(nodes, az[inside], sb[inside])
         n_bearings = int(nodes.has_bearing.sum())
     z0, P0 = cfg.initial(float(start_xy[0]), float(start_xy[1]), float(heading[0]), float(start_speed_mps))
