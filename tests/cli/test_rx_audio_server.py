@@ -130,7 +130,7 @@ def test_a_recording_played_into_pulseaudio_decodes_as_the_file(pulse, tmp_path)
         # PLAY_AFTER_S after the capture started: played at once, the last frame was sometimes not measured (4
         # tries of 4 before the lead-in silence below, 1 of 3 with it) although PortAudio's samples, read without
         # the receiver, were the file's bit for bit: not understood (docs/live.md); played 8 s later, every frame
-        # was, in 10 tries of 10
+        # was, in 6 tries of 6
         time.sleep(PLAY_AFTER_S)
         assert subprocess.run(["paplay", "-d", SINK, str(d / "played.wav")], env=env, timeout=TIMEOUT).returncode == 0
         while len(_rows(d / "live.csv")) < 3:  # each record is written as its frame is measured
