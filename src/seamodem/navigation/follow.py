@@ -371,7 +371,7 @@ class FollowTracker:
     def __init__(self, imu, track_options: dict, *, lag_s: float | None = None):
         from ..errors import ConfigError
         from .inertial.driver import filter_model, filter_settings
-        from .track import BEARING_FLOOR_RAD, RANGE_FLOOR_M, V_R_FLOOR_MPS, _check_positive, inertial_config
+        from .track import BEARING_FLOOR_RAD, RANGE_FLOOR_M, V_R_FLOOR_MPS, check_positive, inertial_config
 
         other = sorted(k for k, v in track_options.items() if k not in self.OPTIONS and v not in (None, False))
         if other:
@@ -382,7 +382,7 @@ class FollowTracker:
         if o["filter"] not in ("inertial", "inertial-range"):
             raise ConfigError("filter", f"a follower runs the inertial filters, not {o['filter']!r}")
         if lag_s is not None:
-            _check_positive("lag_s", lag_s)
+            check_positive("lag_s", lag_s)
         self.options, self.lag_s = o, None if lag_s is None else float(lag_s)
         self.cfg = inertial_config(o["config"], start_sigma_m=o["start_sigma_m"], range_floor_m=o["range_floor_m"],
                                    v_r_floor_mps=o["v_r_floor_mps"])
@@ -482,15 +482,15 @@ class FollowTracker:
 
     def _frame(self, row: dict) -> tuple:
         """(range, v_r, their variances, bearing, its variance) of a record, as run_track makes them."""
-        from .track import (DEFAULT_SIGMA_RANGE_M, DEFAULT_SIGMA_V_R_MPS, _horizontal_ranges,
-                            _normalise_sigma_columns, _record_sigma, bearing_sigma)
+        from .track import (DEFAULT_SIGMA_RANGE_M, DEFAULT_SIGMA_V_R_MPS, horizontal_ranges,
+                            normalise_sigma_columns, record_sigma, bearing_sigma)
 
         o = self.options
-        meas = _normalise_sigma_columns({k: np.array([v], dtype=float) for k, v in row.items()})
-        r = _horizontal_ranges(meas, o["depths"], None, o["beacon_depth_m"], o["sound_speed_profile"])
-        sr, _ = _record_sigma(meas, "sigma_range_m", o["sigma_range_m"], DEFAULT_SIGMA_RANGE_M, o["range_floor_m"],
+        meas = normalise_sigma_columns({k: np.array([v], dtype=float) for k, v in row.items()})
+        r = horizontal_ranges(meas, o["depths"], None, o["beacon_depth_m"], o["sound_speed_profile"])
+        sr, _ = record_sigma(meas, "sigma_range_m", o["sigma_range_m"], DEFAULT_SIGMA_RANGE_M, o["range_floor_m"],
                               "sigma_range_m")
-        sv, _ = _record_sigma(meas, "sigma_v_r_mps", o["sigma_v_r_mps"], DEFAULT_SIGMA_V_R_MPS, o["v_r_floor_mps"],
+        sv, _ = record_sigma(meas, "sigma_v_r_mps", o["sigma_v_r_mps"], DEFAULT_SIGMA_V_R_MPS, o["v_r_floor_mps"],
                               "sigma_v_r_mps")
         az, var = math.nan, math.nan
         if o["use_bearing"] and "azimuth_body_rad" in meas:
