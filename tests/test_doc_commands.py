@@ -145,8 +145,9 @@ ELSEWHERE = {
     "examples/water/thermocline_svp.csv -o track.csv":
         "needs an IMU log; tests/navigation/test_track_profile.py runs nav track --sound-speed-profile --depth",
     "seamodem rx --device 1 --sample-rate 96000 --emit-start 0 --emit-period 3 -o meas.csv":
-        "needs a sound card (docs/live.md); tests/io/test_device.py runs the source with a stand-in for PortAudio",
-    "seamodem nav track meas.csv --follow --imu imu.csv --beacon 50,100 --start 0,0 -o track.csv":
+        "needs a sound card (docs/live.md); tests/cli/test_rx_audio_server.py runs rx --device on a PulseAudio "
+        "server without hardware, tests/io/test_device.py the source with a stand-in for PortAudio",
+    "seamodem nav track meas.csv --follow --imu imu.csv --beacon 50,100 --start 0,0 --fixed-lag 6 -o track.csv":
         "follows a file a running rx is writing (docs/live.md); tests/navigation/test_follow.py follows a growing "
         "file, tests/cli/test_live_pipeline.py runs the whole pipe",
     "seamodem rx RECORDING.wav --emit-start 0 --emit-period 3 -o MEAS.csv":

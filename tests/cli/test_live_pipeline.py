@@ -7,6 +7,7 @@ the NMEA sentences and checks each position against the scenario's truth. No tim
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 import signal
@@ -168,3 +169,33 @@ def test_follow_stalled_input_exit_3_and_ctrl_c_exit_130(recording, tmp_path):
         assert reason in err and "Traceback" not in err
         side = json.loads(out.with_suffix(".json").read_text())
         assert side["ended"] == reason and side["positions"] == 2
+
+
+def test_follow_with_fixed_lag_writes_the_filter_and_the_smoother_as_offline(recording, tmp_path):
+    """``--follow --fixed-lag 4`` on a stream of records: each record's filter row as it comes, its smoothed row
+    once the filter is 4 s past it, the last ones at the end; the smoothed rows are what ``nav track
+    --fixed-lag 4`` writes at those times from the complete file."""
+    d = recording
+    lines = b"".join(_record_line(k) for k in range(6))
+    (tmp_path / "m.jsonl").write_bytes(lines)
+    out = tmp_path / "live.csv"
+    proc = subprocess.run(_nav_follow(d, "--fixed-lag", "4", "-o", str(out)), input=lines, capture_output=True,
+                          env=_env(), timeout=TIMEOUT)
+    assert proc.returncode == 0, proc.stderr.decode()
+    assert "6 positions and 6 smoothed (4 s lag) written" in proc.stderr.decode()
+    rows = list(csv.DictReader(out.open()))
+    # frame k arrives at 3k + 0.14 s: the smoothed row of k comes after the filter row of k + 2 (6 s > 4 s later)
+    order = [(r["estimate"], int(r["frame_index"])) for r in rows]
+    assert order[:5] == [("filter", 0), ("filter", 1), ("filter", 2), ("smoothed", 0), ("filter", 3)]
+    side = json.loads(out.with_suffix(".json").read_text())
+    assert side["fixed_lag_s"] == 4.0 and side["smoothed_positions"] == 6 and "smoothed" in side["estimates"]
+    offline = tmp_path / "offline.csv"
+    assert main(["nav", "track", str(tmp_path / "m.jsonl"), "--imu", str(d / "imu.csv"), "--beacon", "0,0",
+                 "--start=-200,80", "--start-speed", "1.5", "--fixed-lag", "4", "-o", str(offline)]) == 0
+    track = {float(r["t_s"]): r for r in csv.DictReader(offline.open())}
+    for r in rows:
+        if r["estimate"] == "smoothed":
+            want = track[float(r["t_s"])]  # the offline file rounds to 1e-9
+            for c in ("x_m", "y_m", "heading_rad", "speed_mps"):
+                assert float(r[c]) == pytest.approx(float(want[c]), abs=2e-9), c
+            assert float(r["lag_s"]) == (4.0 if float(r["t_s"]) + 4.0 <= 20.0 else pytest.approx(20.0 - float(r["t_s"])))

@@ -268,12 +268,13 @@ def test_bad_streams_are_one_line_exit_2_no_output(rec, tmp_path, data, args, me
 
 
 def test_sound_card_without_sounddevice_is_one_line_exit_2(tmp_path):
-    import importlib.util
-
-    if importlib.util.find_spec("sounddevice") is not None:
-        pytest.skip("sounddevice is installed here: the message is for machines without it")
+    hidden = tmp_path / "hidden"  # a sounddevice that is not there, also where it is installed (the test extra)
+    hidden.mkdir()
+    (hidden / "sounddevice.py").write_text("raise ImportError(\"No module named 'sounddevice'\")\n")
+    env = _env()
+    env["PYTHONPATH"] = os.pathsep.join([str(hidden), env["PYTHONPATH"]])
     p = subprocess.run(_rx("--device", "0", "--sample-rate", "96000", "--emit-start", "0", "--emit-period", "3",
-                           "-o", tmp_path / "m.csv"), capture_output=True, env=_env(), timeout=TIMEOUT)
+                           "-o", tmp_path / "m.csv"), capture_output=True, env=env, timeout=TIMEOUT)
     err = p.stderr.decode()
     assert p.returncode == 2 and err.count("\n") == 1 and "pip install 'seamodem[live]'" in err
     assert not (tmp_path / "m.csv").exists()

@@ -34,7 +34,8 @@ def add_follow_options(t: argparse.ArgumentParser) -> None:
     g = t.add_argument_group(
         "real time (docs/live.md)",
         "--follow: read MEAS (a file that grows, a FIFO, or '-' for stdin) as records arrive and write each "
-        "position as it is computed (-o OUT.csv, OUT.jsonl or '-'); the filter's position at each record.",
+        "position as it is computed (-o OUT.csv, OUT.jsonl or '-'): the filter's position at each record and, "
+        "with --fixed-lag S, the smoothed one S seconds behind (column estimate: filter or smoothed).",
     )
     g.add_argument("--follow", action="store_true", help="follow the records as they arrive (real time)")
     g.add_argument("--nmea", metavar="udp://HOST:PORT",
@@ -77,9 +78,9 @@ def _check(args: argparse.Namespace) -> None:
     for name in ("smooth", "truth", "fixes", "depth_log"):
         if getattr(args, name):
             raise SeamodemError(f"{name.replace('_', '-')}: not with --follow (real-time positions are the "
-                                "filter's; run nav track on the complete file afterwards)")
-    if args.fixed_lag is not None:
-        raise SeamodemError("fixed-lag: not with --follow (real-time positions are the filter's)")
+                                "filter's and --fixed-lag's; run nav track on the complete file afterwards)")
+    if args.fixed_lag is not None and not (math.isfinite(args.fixed_lag) and args.fixed_lag > 0):
+        raise SeamodemError(f"fixed-lag: must be > 0 [s], got {args.fixed_lag!r}")
     if args.filter not in ("inertial", "inertial-range"):
         raise SeamodemError(f"filter: --follow runs the inertial filters, not {args.filter!r}")
     if args.nmea and not args.geodetic:
@@ -167,8 +168,8 @@ def follow(args: argparse.Namespace, config, command: str) -> int:
     return run_follow(args, options, origin, command)
 
 
-def warm_up(track_options: dict) -> None:
-    """Run the filter once on a synthetic record before the first real one (its kernels' first calls).
+def warm_up(track_options: dict, lag_s: float | None = None) -> None:
+    """Follow a synthetic record once before the first real one (the kernels' first calls).
 
     The first position of a run otherwise pays for them (about 0.4 s here, benchmarks/bench_live.py);
     the records that arrive meanwhile wait in the pipe.
@@ -176,27 +177,27 @@ def warm_up(track_options: dict) -> None:
     Parameters
     ----------
     track_options : dict
-        :func:`~seamodem.navigation.track.run_track` keywords.
+        :class:`~seamodem.navigation.follow.FollowTracker` options.
+    lag_s : float, optional
+        The fixed-lag smoother's lag [s] (its kernels too).
     """
-    import warnings
-
     import numpy as np
 
-    from ..navigation.track import run_track
+    from ..navigation.follow import FollowTracker
 
     (bx, by), (sx, sy) = track_options["beacon_xy"], track_options["start_xy"]
     d = math.hypot(sx - bx, sy - by) + 100.0  # beyond any depth difference
-    zeros = np.zeros(3)
-    imu = {"t_s": np.array([0.0, 0.25, 0.5]), "heading_rad": zeros, "omega_rad_s": zeros, "accel_mps2": zeros}
-    meas = {"frame_index": np.array([0.0]), "t_emit_s": np.array([0.1]), "t_arrival_s": np.array([0.2]),
-            "tof_s": np.array([d / 1500.0]), "range_m": np.array([d]), "v_r_mps": np.array([0.0]),
-            "snr_db": np.array([20.0])}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            run_track(meas, imu, **track_options)
-        except (SeamodemError, ValueError):  # the real records say what is wrong, if anything
-            pass
+    t = np.arange(0.0, 2.01, 0.25)
+    zeros = np.zeros(t.size)
+    imu = {"t_s": t, "heading_rad": zeros, "omega_rad_s": zeros, "accel_mps2": zeros}
+    try:
+        tracker = FollowTracker(imu, track_options, lag_s=None if lag_s is None else min(lag_s, 1.0))
+        for k, t_a in enumerate((0.2, 1.1)):
+            tracker.add({"frame_index": float(k), "t_emit_s": t_a - d / 1500.0, "t_arrival_s": t_a,
+                         "tof_s": d / 1500.0, "range_m": d, "v_r_mps": 0.0, "snr_db": 20.0})
+        tracker.finish()
+    except (SeamodemError, ValueError):  # the real records say what is wrong, if anything
+        pass
 
 
 def run_follow(args: argparse.Namespace, track_options: dict, origin, command: str) -> int:
@@ -219,19 +220,25 @@ def run_follow(args: argparse.Namespace, track_options: dict, origin, command: s
     """
     from ..navigation.follow import FollowTracker, RecordFollower
     from ..navigation.geometry import local_to_geodetic
-    from ..navigation.nmea import gga, rmc
 
     t0 = _utc_start(args.utc_start)
     udp = parse_udp(args.nmea) if args.nmea else None
     stop = threading.Event()
     follower = RecordFollower(args.measurements, stop=stop, idle_timeout_s=args.stall_timeout)
-    tracker = FollowTracker(args.imu, track_options)
-    columns = ["t_s", "x_m", "y_m", "heading_rad", "speed_mps", "var_x_m2", "cov_xy_m2", "var_y_m2"]
+    lag = args.fixed_lag
+    tracker = FollowTracker(args.imu, track_options, lag_s=lag)
+    columns = ["estimate", "lag_s", "t_s", "x_m", "y_m", "heading_rad", "speed_mps", "var_x_m2", "cov_xy_m2",
+               "var_y_m2"]
     columns += ["lat_deg", "lon_deg"] if origin is not None else []
     columns += ["frame_index", "t_arrival_s", "status", "nis"]
-    meta = {"format": "seamodem.track-follow/1", "command": command, "measurements": args.measurements,
+    meta = {"format": "seamodem.track-follow/2", "command": command, "measurements": args.measurements,
             "imu": args.imu, "beacon": args.beacon, "start": args.start, "geodetic": bool(args.geodetic),
-            "filter": args.filter, "nmea": args.nmea, "utc_start": datetime.fromtimestamp(t0, timezone.utc).isoformat(),
+            "filter": args.filter, "fixed_lag_s": lag,
+            "estimates": "filter: the filter's position at each record, written as the record arrives"
+                         + ("" if lag is None else f"; smoothed: the fixed-lag smoother's position at a record, "
+                            f"written once the filter is {lag:g} s past it (lag_s: the lag used, shorter at the "
+                            "end of the input)"),
+            "nmea": args.nmea, "utc_start": datetime.fromtimestamp(t0, timezone.utc).isoformat(),
             "track_options": {k: v for k, v in track_options.items() if k not in ("config", "sound_speed_profile")},
             "inertial_config": _jsonable(track_options.get("config")), "columns": columns, "complete": False}
     stdout = sys.stdout
@@ -245,37 +252,32 @@ def run_follow(args: argparse.Namespace, track_options: dict, origin, command: s
         old[sig] = signal.signal(sig, on_signal)
     sock = socket.socket(socket.AF_INET6 if ":" in udp[0] else socket.AF_INET, socket.SOCK_DGRAM) if udp else None
     out = _Output(args.output, meta, columns, stdout)
-    warm_up(track_options)
-    n, reason = 0, None
+    warm_up(track_options, lag)
+    counts = {"filter": 0, "smoothed": 0}
+
+    def emit(pos: dict) -> bool:
+        """Write a position (and send it, the filter's); False when the output's reader has gone."""
+        if origin is not None:
+            lat, lon = local_to_geodetic(pos["x_m"], pos["y_m"], *origin)
+            pos["lat_deg"], pos["lon_deg"] = float(lat), float(lon)
+        if sock is not None and pos["estimate"] == "filter":
+            _send_nmea(sock, udp, pos, t0, args.depth[0] if args.depth else 0.0, tracker.warnings)
+        try:
+            out.write(pos)
+        except BrokenPipeError:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
+            return False
+        counts[pos["estimate"]] += 1
+        return True
+
+    reason = None
     try:
         for row in follower:
-            pos = tracker.add(row)
-            if pos is None:
-                continue
-            if origin is not None:
-                lat, lon = local_to_geodetic(pos["x_m"], pos["y_m"], *origin)
-                pos["lat_deg"], pos["lon_deg"] = float(lat), float(lon)
-            if sock is not None:
-                t_utc = t0 + pos["t_s"]
-                sigma = math.sqrt(max(pos["var_x_m2"] + pos["var_y_m2"], 0.0))
-                depth = args.depth[0] if args.depth else 0.0
-                for text in (gga(time_s=t_utc, lat_deg=pos["lat_deg"], lon_deg=pos["lon_deg"], sigma_m=sigma,
-                                 altitude_m=-depth),
-                             rmc(time_s=t_utc, lat_deg=pos["lat_deg"], lon_deg=pos["lon_deg"],
-                                 speed_mps=pos["speed_mps"], course_deg=90.0 - math.degrees(pos["heading_rad"]))):
-                    try:
-                        sock.sendto(text.encode("ascii"), udp)
-                    except OSError as exc:  # nobody listening yet (ICMP refused): the next one may get through
-                        note = f"nmea: {udp[0]}:{udp[1]}: {exc.strerror}"
-                        if note not in tracker.warnings:
-                            tracker.warnings.append(note)
-            try:
-                out.write(pos)
-            except BrokenPipeError:
+            if not all(emit(pos) for pos in tracker.add(row)):
                 reason = "output closed"
-                os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
                 break
-            n += 1
+        if reason is None and not all(emit(pos) for pos in tracker.finish()):
+            reason = "output closed"
     finally:
         follower.close()
         for sig, handler in old.items():
@@ -284,13 +286,33 @@ def run_follow(args: argparse.Namespace, track_options: dict, origin, command: s
         if sock is not None:
             sock.close()
     reason = reason or follower.end_reason or "end of stream"
-    out.close(complete=True, ended=reason, positions=n, warnings=tracker.warnings)
+    n = counts["filter"]
+    out.close(complete=True, ended=reason, positions=n, smoothed_positions=counts["smoothed"],
+              warnings=tracker.warnings)
     for line in tracker.warnings:
         print(f"seamodem nav track: warning: {line}", file=sys.stderr)
-    print(f"seamodem nav track: {reason}: {n} position{'s' if n != 1 else ''} written to "
-          f"{'stdout' if args.output == '-' else args.output}" + (f" and sent to {args.nmea}" if udp else ""),
+    smoothed = f" and {counts['smoothed']} smoothed ({lag:g} s lag)" if lag is not None else ""
+    print(f"seamodem nav track: {reason}: {n} position{'s' if n != 1 else ''}{smoothed} written to "
+          f"{'stdout' if args.output == '-' else args.output}" + (f", the filter's sent to {args.nmea}" if udp else ""),
           file=sys.stderr)
     return EXIT_CODES.get(reason, 1)
+
+
+def _send_nmea(sock, udp, pos: dict, t0: float, depth: float, notes: list) -> None:
+    """GGA and RMC of a position, one datagram each; a destination that refuses is noted once."""
+    from ..navigation.nmea import gga, rmc
+
+    t_utc = t0 + pos["t_s"]
+    sigma = math.sqrt(max(pos["var_x_m2"] + pos["var_y_m2"], 0.0))
+    for text in (gga(time_s=t_utc, lat_deg=pos["lat_deg"], lon_deg=pos["lon_deg"], sigma_m=sigma, altitude_m=-depth),
+                 rmc(time_s=t_utc, lat_deg=pos["lat_deg"], lon_deg=pos["lon_deg"], speed_mps=pos["speed_mps"],
+                     course_deg=90.0 - math.degrees(pos["heading_rad"]))):
+        try:
+            sock.sendto(text.encode("ascii"), udp)
+        except OSError as exc:  # nobody listening yet (ICMP refused): the next one may get through
+            note = f"nmea: {udp[0]}:{udp[1]}: {exc.strerror}"
+            if note not in notes:
+                notes.append(note)
 
 
 def _jsonable(config):

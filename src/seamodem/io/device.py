@@ -22,7 +22,11 @@ import numpy as np
 from ..errors import InputFileError
 from .source import RecordingSource, columns
 
-__all__ = ["DeviceSource", "open_device"]
+__all__ = ["DeviceSource", "open_device", "BUFFER_S"]
+
+#: The capture buffer PortAudio is asked for [s] (its input "latency"): room for the samples that arrive while
+#: the receiver holds the interpreter. Blocks are still handed on every ``block_s``: the records are not later.
+BUFFER_S = 1.0
 
 
 def _sounddevice():
@@ -45,7 +49,8 @@ class DeviceSource(RecordingSource):
     Parameters
     ----------
     stream_factory : callable
-        ``stream_factory(callback)`` → a started-on-``start()`` PortAudio input stream.
+        ``stream_factory(callback)`` → a started-on-``start()`` PortAudio input stream, called when the
+        samples are first read.
     name : str
         The device as named in messages.
     sample_rate_hz : float
@@ -66,7 +71,8 @@ class DeviceSource(RecordingSource):
                  stop: threading.Event | None = None):
         super().__init__(name, sample_rate_hz, n_channels, None, kind="stream", clip_level=1.0)
         self._queue: queue.Queue = queue.Queue()
-        self._stream = stream_factory(self._callback)
+        self._factory = stream_factory
+        self._stream = None
         self.stop = stop
         self.end_reason: str | None = None
         self.overruns = 0
@@ -76,6 +82,9 @@ class DeviceSource(RecordingSource):
 
     def _read(self, channels, start, stop, block):
         pos = 0
+        # opened here, when the reader is ready, not before: a device opened early captures into its buffer
+        # (ALSA's PulseAudio plugin does) and silently drops what does not fit before the first read
+        self._stream = self._factory(self._callback)
         self._stream.start()
         try:
             while stop is None or pos < stop:
@@ -140,7 +149,8 @@ def open_device(device: str, *, sample_rate_hz: float | None, n_channels: int = 
 
     def factory(callback):
         return sd.InputStream(device=dev, channels=n_channels, samplerate=sample_rate_hz, dtype="float32",
-                              blocksize=max(1, int(round(block_s * sample_rate_hz))), callback=callback)
+                              blocksize=max(1, int(round(block_s * sample_rate_hz))), latency=BUFFER_S,
+                              callback=callback)
 
     return DeviceSource(factory, name=f"device {info['name']}", sample_rate_hz=sample_rate_hz,
                         n_channels=n_channels, stop=stop)

@@ -103,7 +103,7 @@ def _warn(message: str) -> None:
     warnings.warn(message, LogWarning, stacklevel=3)
 
 
-def _normalise_sigma_columns(meas: dict) -> dict:
+def normalise_sigma_columns(meas: dict) -> dict:
     """Records' σ under the names ``seamodem rx`` writes (``range_std_m`` → ``sigma_range_m``...)."""
     meas = dict(meas)
     for theirs, ours in (("range_std_m", "sigma_range_m"), ("v_r_std_mps", "sigma_v_r_mps")):
@@ -112,7 +112,7 @@ def _normalise_sigma_columns(meas: dict) -> dict:
     return meas
 
 
-def _horizontal_ranges(meas: dict, depths, depth_log, beacon_depth_m, profile=None) -> np.ndarray:
+def horizontal_ranges(meas: dict, depths, depth_log, beacon_depth_m, profile=None) -> np.ndarray:
     ranges = np.asarray(meas["range_m"], dtype=float)
     if depths is not None and depth_log is not None:
         raise ConfigError("depths", "give either fixed depths or a depth log, not both")
@@ -129,7 +129,7 @@ def _horizontal_ranges(meas: dict, depths, depth_log, beacon_depth_m, profile=No
     return ProfileRanging.for_records(profile, beacon, vehicle, meas["tof_s"]).horizontal_range(meas["tof_s"], vehicle)
 
 
-def _check_positive(name, value):
+def check_positive(name, value):
     if not (value is not None and math.isfinite(value) and value > 0):
         raise ConfigError(name, f"must be a finite number > 0, got {value!r}")
 
@@ -203,8 +203,8 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
         smooth = None
     if smooth not in SMOOTHERS:
         raise ConfigError("smooth", f"must be None, 'batch' or 'fixed-lag', got {smooth!r}")
-    meas = _normalise_sigma_columns(meas)
-    ranges = _horizontal_ranges(meas, depths, depth_log, beacon_depth_m, sound_speed_profile)
+    meas = normalise_sigma_columns(meas)
+    ranges = horizontal_ranges(meas, depths, depth_log, beacon_depth_m, sound_speed_profile)
     if filter in ("proposed", "rosb"):
         if smooth == "fixed-lag":
             raise ConfigError("smooth", f"the fixed-lag smoother needs an inertial filter, not {filter!r}")
@@ -244,11 +244,11 @@ def run_track(meas: dict, imu: dict, *, beacon_xy, start_xy, start_speed_mps=0.0
                            bearing_floor_rad=bearing_floor_rad)
 
 
-def _record_sigma(meas, column, given, default, floor, name) -> tuple[np.ndarray, str]:
+def record_sigma(meas, column, given, default, floor, name) -> tuple[np.ndarray, str]:
     """σ per record: the user's value, else the record's raised to the floor (NaN rows: the default)."""
     n = np.asarray(meas["range_m"]).size
     if given is not None:
-        _check_positive(name, given)
+        check_positive(name, given)
         return np.full(n, float(given)), "command line"
     if column in meas:
         sigma = np.asarray(meas[column], dtype=float)
@@ -261,28 +261,44 @@ def _record_sigma(meas, column, given, default, floor, name) -> tuple[np.ndarray
     return np.full(n, float(default)), "default (records carry none)"
 
 
-def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, use_vr, smooth, lag_s, config,
-                    range_floor_m, v_r_floor_mps, sigma_range_m, sigma_v_r_mps, start_sigma_m, fixes, filter,
-                    depths, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
-    from .inertial import InertialConfig, add_bearings, add_fixes, build_nodes, run_filter, state_names
-    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
+def inertial_config(config, *, start_sigma_m, range_floor_m, v_r_floor_mps):
+    """The inertial filter's configuration with the start σ, once the floors and the start σ are checked."""
+    from .inertial import InertialConfig
 
     for name, value in (("range_floor_m", range_floor_m), ("v_r_floor_mps", v_r_floor_mps)):
         if not (value is not None and math.isfinite(value) and value >= 0):
             raise ConfigError(name, f"must be a finite number >= 0, got {value!r}")
-    _check_positive("start_sigma_m", start_sigma_m)
+    check_positive("start_sigma_m", start_sigma_m)
+    return replace(config if config is not None else InertialConfig(), p0_position_m=float(start_sigma_m))
+
+
+def bearing_sigma(meas: dict, bearing_floor_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """The records' ``azimuth_body_rad`` and the σ used for each: the record's (or
+    :data:`DEFAULT_SIGMA_BEARING_RAD`) raised to ``bearing_floor_rad``."""
+    az = np.asarray(meas["azimuth_body_rad"], dtype=float)
+    sb = np.asarray(meas.get("sigma_azimuth_body_rad", np.full(az.size, np.nan)), dtype=float)
+    return az, np.maximum(np.where(np.isfinite(sb) & (sb > 0), sb, DEFAULT_SIGMA_BEARING_RAD), bearing_floor_rad)
+
+
+def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, use_vr, smooth, lag_s, config,
+                    range_floor_m, v_r_floor_mps, sigma_range_m, sigma_v_r_mps, start_sigma_m, fixes, filter,
+                    depths, use_bearing=True, bearing_floor_rad=BEARING_FLOOR_RAD) -> dict:
+    from .inertial import add_bearings, add_fixes, build_nodes, run_filter, state_names
+    from .inertial.smoothers import batch_smooth, fixed_lag_smooth
+
     if smooth == "fixed-lag":
-        _check_positive("lag_s", lag_s)
-    cfg = replace(config if config is not None else InertialConfig(), p0_position_m=float(start_sigma_m))
+        check_positive("lag_s", lag_s)
+    cfg = inertial_config(config, start_sigma_m=start_sigma_m, range_floor_m=range_floor_m,
+                          v_r_floor_mps=v_r_floor_mps)
     t_imu = np.asarray(imu["t_s"], dtype=float)
     if t_imu.size < 2 or np.any(np.diff(t_imu) <= 0):
         raise InputFileError("IMU samples: need at least two, with strictly increasing t_s")
     heading = np.asarray(imu["heading_rad"], dtype=float)
     if not math.isfinite(heading[0]):
         raise InputFileError("IMU samples: the first heading (the start heading) is not a number")
-    sr, r_source = _record_sigma(meas, "sigma_range_m", sigma_range_m, DEFAULT_SIGMA_RANGE_M, range_floor_m,
+    sr, r_source = record_sigma(meas, "sigma_range_m", sigma_range_m, DEFAULT_SIGMA_RANGE_M, range_floor_m,
                                  "sigma_range_m")
-    sv, v_source = _record_sigma(meas, "sigma_v_r_mps", sigma_v_r_mps, DEFAULT_SIGMA_V_R_MPS, v_r_floor_mps,
+    sv, v_source = record_sigma(meas, "sigma_v_r_mps", sigma_v_r_mps, DEFAULT_SIGMA_V_R_MPS, v_r_floor_mps,
                                  "sigma_v_r_mps")
     t_frame = np.asarray(meas["t_arrival_s"], dtype=float)
     inside = (t_frame >= t_imu[0]) & (t_frame <= t_imu[-1])
@@ -308,9 +324,7 @@ def _inertial_track(meas, ranges, imu, *, beacon_xy, start_xy, start_speed_mps, 
     if not (bearing_floor_rad is not None and math.isfinite(bearing_floor_rad) and bearing_floor_rad >= 0):
         raise ConfigError("bearing_floor_rad", f"must be a finite number >= 0, got {bearing_floor_rad!r}")
     if use_bearing and "azimuth_body_rad" in meas and np.isfinite(meas["azimuth_body_rad"]).any():
-        az = np.asarray(meas["azimuth_body_rad"], dtype=float)
-        sb = np.asarray(meas.get("sigma_azimuth_body_rad", np.full(az.size, np.nan)), dtype=float)
-        sb = np.maximum(np.where(np.isfinite(sb) & (sb > 0), sb, DEFAULT_SIGMA_BEARING_RAD), bearing_floor_rad)
+        az, sb = bearing_sigma(meas, bearing_floor_rad)
         nodes = add_bearings(nodes, az[inside], sb[inside])
         n_bearings = int(nodes.has_bearing.sum())
     z0, P0 = cfg.initial(float(start_xy[0]), float(start_xy[1]), float(heading[0]), float(start_speed_mps))

@@ -9,6 +9,8 @@ the vehicle in the loop.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -18,7 +20,7 @@ from .models import predict
 from .records import Track, with_used, workspace
 from .updates import floor_speed, gated_acoustic, gated_bearing, update_heading, update_position
 
-__all__ = ["record_prior", "filter_nodes"]
+__all__ = ["record_prior", "filter_nodes", "filter_span", "FilterOutput"]
 
 
 @njit(cache=True, nogil=True)
@@ -55,6 +57,97 @@ def record_prior(k, z, P, F, lay, track):
             history[k, a, 1 + b] = P[a, b]
             history[k, a, m + 1 + b] = P[a, b]
             history[k, a, 2 * m + 1 + b] = (1.0 if a == b else 0.0) if F is None else F[a, b]
+
+
+class FilterOutput(NamedTuple):
+    """What the filter reports per node besides its states (:func:`filter_span` fills it).
+
+    Parameters
+    ----------
+    nis, status, bearing_nis, bearing_status, online, windows : ndarray
+        As :func:`filter_nodes` returns them.
+    used_frame, used_bearing : ndarray, shape (N,), bool
+        The frames and bearings the filter used (a window re-linearization reads them).
+    """
+
+    nis: np.ndarray
+    status: np.ndarray
+    bearing_nis: np.ndarray
+    bearing_status: np.ndarray
+    used_frame: np.ndarray
+    used_bearing: np.ndarray
+    online: np.ndarray
+    windows: np.ndarray
+
+
+@njit(cache=True, nogil=True)
+def filter_span(i_begin, i_end, z, P, lay, model, settings, nodes, track, out, runs):
+    """The filter over nodes ``i_begin`` … ``i_end − 1`` from (z, P) after node ``i_begin − 1``, in place.
+
+    :func:`filter_nodes` runs it over every node; a follower (:class:`~seamodem.navigation.follow.FollowTracker`)
+    runs it over the nodes each new record brings, on arrays that keep the last nodes (at least the
+    re-linearization window before ``i_begin``): the same operations in the same order.
+
+    Parameters
+    ----------
+    i_begin, i_end : int
+        Nodes to run.
+    z, P : ndarray, shapes (n,), (n, n)
+        State and covariance after node ``i_begin − 1`` (before node 0's measurements when ``i_begin`` is 0);
+        left at node ``i_end − 1``'s posterior.
+    lay : ndarray, shape (5,), int64
+        State layout and the current chart (updated).
+    model, settings, nodes
+        As :func:`filter_nodes`.
+    track : Track
+        States, history and charts, written at the nodes run (and rewritten by a window re-linearization).
+    out : FilterOutput
+        Per-node output, written at the nodes run.
+    runs : ndarray, shape (2,), int64
+        Frames and bearings gated in a row so far (updated).
+
+    Returns
+    -------
+    None
+    """
+    n = z.shape[0]
+    states, history = track.states, track.history
+    ws = workspace(n)
+    nis_out, status, bearing_nis, bearing_status = out.nis, out.status, out.bearing_nis, out.bearing_status
+    used_frame, used_bearing, online, windows = out.used_frame, out.used_bearing, out.online, out.windows
+    used = with_used(nodes, used_frame, used_bearing)
+    gated_run = runs[0]
+    bearing_gated = runs[1]
+    for i in range(i_begin, i_end):
+        if i > 0:
+            predict(z, P, lay, model, nodes.omega[i], nodes.accel[i], nodes.dt[i], ws)
+            record_prior(i, z, P, ws.F, lay, track)
+        else:
+            record_prior(i, z, P, None, lay, track)
+        if nodes.has_frame[i]:
+            nis_out[i], status[i], gated_run = gated_acoustic(z, P, lay, model, settings, nodes.meas[i],
+                                                              nodes.meas_var[i], gated_run, ws)
+        if nodes.has_heading[i]:
+            update_heading(z, P, nodes.heading[i], nodes.heading_var[i], ws.ph)
+        if nodes.has_bearing[i]:
+            bearing_nis[i], bearing_status[i], bearing_gated = gated_bearing(
+                z, P, lay, model, settings, nodes.bearing[i], nodes.bearing_var[i], bearing_gated, ws)
+        if nodes.has_fix[i]:
+            update_position(z, P, lay, model.beacon, z.copy(), nodes.fix[i], nodes.fix_var[i], ws.ph)
+        floor_speed(z, P, settings.v_floor)
+        for a in range(n):
+            states[i, a] = z[a]
+            for b in range(n):
+                history[i, a, n + 1 + b] = P[a, b]
+        used_frame[i] = nodes.has_frame[i] and status[i] != 2
+        used_bearing[i] = bearing_status[i] == 1 or bearing_status[i] == 3
+        if settings.window_s > 0 and used_frame[i] and nis_out[i] > settings.window_nis:
+            i0 = window_start(i, nodes.dt, settings.window_s)
+            if i0 < i:
+                windows[i] = relinearize_window(i0, i, track, lay, model, settings, used, z, P)
+        online[i, 0], online[i, 1] = cartesian(z, lay, model.beacon)
+    runs[0] = gated_run
+    runs[1] = bearing_gated
 
 
 @njit(cache=True, nogil=True)
@@ -99,47 +192,10 @@ def filter_nodes(z0, P0, lay, model, settings, nodes, history):
     n = z0.shape[0]
     lay = lay.copy()
     track = Track(np.empty((N, n)), history, np.zeros(N, dtype=np.int8))
-    states = track.states
+    out = FilterOutput(np.full(N, np.nan), np.zeros(N, dtype=np.int8), np.full(N, np.nan), np.zeros(N, dtype=np.int8),
+                       np.zeros(N, dtype=np.bool_), np.zeros(N, dtype=np.bool_), np.empty((N, 2)),
+                       np.zeros(N, dtype=np.int64))
     z = z0.copy()
     P = P0.copy()
-    ws = workspace(n)
-    nis_out = np.full(N, np.nan)
-    status = np.zeros(N, dtype=np.int8)
-    bearing_nis = np.full(N, np.nan)
-    bearing_status = np.zeros(N, dtype=np.int8)
-    used_frame = np.zeros(N, dtype=np.bool_)
-    used_bearing = np.zeros(N, dtype=np.bool_)
-    used = with_used(nodes, used_frame, used_bearing)
-    online = np.empty((N, 2))
-    windows = np.zeros(N, dtype=np.int64)
-    gated_run = 0
-    bearing_gated = 0
-    for i in range(N):
-        if i > 0:
-            predict(z, P, lay, model, nodes.omega[i], nodes.accel[i], nodes.dt[i], ws)
-            record_prior(i, z, P, ws.F, lay, track)
-        else:
-            record_prior(i, z, P, None, lay, track)
-        if nodes.has_frame[i]:
-            nis_out[i], status[i], gated_run = gated_acoustic(z, P, lay, model, settings, nodes.meas[i],
-                                                              nodes.meas_var[i], gated_run, ws)
-        if nodes.has_heading[i]:
-            update_heading(z, P, nodes.heading[i], nodes.heading_var[i], ws.ph)
-        if nodes.has_bearing[i]:
-            bearing_nis[i], bearing_status[i], bearing_gated = gated_bearing(
-                z, P, lay, model, settings, nodes.bearing[i], nodes.bearing_var[i], bearing_gated, ws)
-        if nodes.has_fix[i]:
-            update_position(z, P, lay, model.beacon, z.copy(), nodes.fix[i], nodes.fix_var[i], ws.ph)
-        floor_speed(z, P, settings.v_floor)
-        for a in range(n):
-            states[i, a] = z[a]
-            for b in range(n):
-                history[i, a, n + 1 + b] = P[a, b]
-        used_frame[i] = nodes.has_frame[i] and status[i] != 2
-        used_bearing[i] = bearing_status[i] == 1 or bearing_status[i] == 3
-        if settings.window_s > 0 and used_frame[i] and nis_out[i] > settings.window_nis:
-            i0 = window_start(i, nodes.dt, settings.window_s)
-            if i0 < i:
-                windows[i] = relinearize_window(i0, i, track, lay, model, settings, used, z, P)
-        online[i, 0], online[i, 1] = cartesian(z, lay, model.beacon)
-    return states, nis_out, status, track.charts, bearing_nis, bearing_status, online, windows
+    filter_span(0, N, z, P, lay, model, settings, nodes, track, out, np.zeros(2, dtype=np.int64))
+    return track.states, out.nis, out.status, track.charts, out.bearing_nis, out.bearing_status, out.online, out.windows

@@ -29,7 +29,7 @@ from .driver import FilterRun, filter_model
 from .kernels import linearized_pass, rts_backward, rts_gains
 from .records import LinearPass
 
-__all__ = ["SMOOTHER_POSITION_RW", "SmoothedTrack", "batch_smooth", "fixed_lag_smooth"]
+__all__ = ["SMOOTHER_POSITION_RW", "SmoothedTrack", "batch_smooth", "fixed_lag_smooth", "lag_back"]
 
 
 class SmoothedTrack:
@@ -162,19 +162,38 @@ def batch_smooth(run: FilterRun, *, max_iterations: int = 10, tol: float = 1e-6,
 
 
 @njit(cache=True, nogil=True)
+def lag_back(post, P_post, prior, P_prior, C, k, j):
+    """Node k's state and covariance given everything up to node j ≥ k: the RTS recursion from j back to k.
+
+    Parameters
+    ----------
+    post, P_post, prior, P_prior : ndarray
+        The filter's posteriors and priors (internal charts).
+    C : ndarray, shape (N, n, n)
+        The smoother gains (:func:`~.kernels.rts_gains`); rows k … j − 1 are read.
+    k, j : int
+        Node smoothed, last node used.
+
+    Returns
+    -------
+    xs : ndarray, shape (n,)
+    Ps : ndarray, shape (n, n)
+    """
+    xs = post[j].copy()
+    Ps = P_post[j].copy()
+    for m in range(j - 1, k - 1, -1):
+        xs = post[m] + C[m] @ (xs - prior[m + 1])
+        Ps = P_post[m] + C[m] @ (Ps - P_prior[m + 1]) @ C[m].T
+    return xs, 0.5 * (Ps + Ps.T)
+
+
+@njit(cache=True, nogil=True)
 def _fixed_lag(post, P_post, prior, P_prior, C, end):
     N, n = post.shape
     xs_out = np.empty((N, n))
     Ps_out = np.empty((N, n, n))
     for k in range(N):
-        j = end[k]
-        xs = post[j].copy()
-        Ps = P_post[j].copy()
-        for m in range(j - 1, k - 1, -1):
-            xs = post[m] + C[m] @ (xs - prior[m + 1])
-            Ps = P_post[m] + C[m] @ (Ps - P_prior[m + 1]) @ C[m].T
-        xs_out[k] = xs
-        Ps_out[k] = 0.5 * (Ps + Ps.T)
+        xs_out[k], Ps_out[k] = lag_back(post, P_post, prior, P_prior, C, k, end[k])
     return xs_out, Ps_out
 
 
