@@ -37,14 +37,20 @@ def _recording(rng, *, direct_gain: float, echo_delay_s: float, snr_db: float, n
     return x, t_emit, tof, payloads
 
 
-@pytest.mark.parametrize("direct_gain,echo_delay_s", [(0.6, 2.2e-3), (0.35, 2.2e-3), (0.35, 6.0e-3)])
-def test_the_direct_path_before_a_stronger_late_echo_is_the_range(direct_gain, echo_delay_s):
-    rng = np.random.default_rng(4101)
-    x, t_emit, tof, payloads = _recording(rng, direct_gain=direct_gain, echo_delay_s=echo_delay_s, snr_db=15.0)
+def _received(seed: int, direct_gain: float, echo_delay_s: float):
+    """The records of every frame (all must be found) by frame index, and the true times of flight."""
+    x, t_emit, tof, payloads = _recording(np.random.default_rng(seed), direct_gain=direct_gain,
+                                          echo_delay_s=echo_delay_s, snr_db=15.0)
     rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True),
                   payloads=payloads)
     records = {r.frame_index: r for r in rx.run([x], fs=FS)}
     assert sorted(records) == list(range(len(t_emit)))
+    return records, tof
+
+
+@pytest.mark.parametrize("direct_gain,echo_delay_s", [(0.6, 2.2e-3), (0.35, 2.2e-3), (0.35, 6.0e-3)])
+def test_the_direct_path_before_a_stronger_late_echo_is_the_range(direct_gain, echo_delay_s):
+    records, tof = _received(4101, direct_gain, echo_delay_s)
     for k, r in records.items():
         err = r.range_m - C * tof[k]
         # the echo is c·δ = 3.3 / 9 m behind: the direct path's range, and a σ that covers it
@@ -56,12 +62,7 @@ def test_a_direct_path_below_the_first_path_share_leaves_the_echo_with_a_sigma_t
     # at 0.22 of the echo the direct path is below the first-path share (0.3): the echo is the range, but the
     # precursor found before it sets the arrival's σ (frame.earlier_path_gap_s) — before the search, 3.3 m
     # off with σ of millimetres
-    rng = np.random.default_rng(4102)
-    x, t_emit, tof, payloads = _recording(rng, direct_gain=0.22, echo_delay_s=2.2e-3, snr_db=15.0)
-    rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True),
-                  payloads=payloads)
-    records = {r.frame_index: r for r in rx.run([x], fs=FS)}
-    assert sorted(records) == list(range(len(t_emit)))
+    records, tof = _received(4102, 0.22, 2.2e-3)
     for k, r in records.items():
         err = r.range_m - C * tof[k]
         assert abs(err) <= 3 * r.sigma_range_m, (k, err, r.sigma_range_m)
