@@ -228,11 +228,19 @@ def main() -> int:
         f"max after the first {1e3 * max(udp_lat[1:]):.1f}  (n = {len(udp_lat)}; the first includes loading the "
         "filter's compiled kernels)",
         "",
-        "RSS [MiB]: first sample (5 s after start) / last / max",
+        "RSS [MiB] (sampled every second from 5 s): at 5 s / at 1 min / at 5 min / last / max; growth from 1 min "
+        "to the end (goal: none)",
     ]
     for name in ("rx", "nav"):
         v = rss[name]
-        lines.append(f"  {name:4s} {v[0]:7.1f} / {v[-1]:7.1f} / {max(v):7.1f}  ({len(v)} samples)")
+
+        def at(minutes: float) -> str:
+            i = int(minutes * 60 - 5)
+            return f"{v[i]:7.1f}" if 0 <= i < len(v) else "      -"
+
+        growth = f"{v[-1] - v[55]:+.1f}" if len(v) > 55 else "-"
+        lines.append(f"  {name:4s} {v[0]:7.1f} / {at(1)} / {at(5)} / {v[-1]:7.1f} / {max(v):7.1f}  "
+                     f"({len(v)} samples; {growth} MiB)")
     lines += ["", "per record: frame_index, t_arrival_s, latency frame end -> record [s], record -> GGA [ms]"]
     for i, (now, r) in enumerate(records):
         u = f"{1e3 * udp_lat[i]:.1f}" if i < len(udp_lat) else "-"
