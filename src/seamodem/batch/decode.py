@@ -57,6 +57,9 @@ __all__ = [
     "decode_part",
     "decode_files",
     "min_overlap_s",
+    "default_overlap_s",
+    "guard_for",
+    "overlap_for",
     "PART_FORMAT",
 ]
 
@@ -100,8 +103,42 @@ def _frame_span_s(rec: Recording) -> float:
     return frame_span_s(rec.config, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
 
 
+def guard_for(frame_duration_s: float) -> float:
+    """Half-width of the band around a segment boundary where a frame found twice is kept once [s].
+
+    Parameters
+    ----------
+    frame_duration_s : float
+        The shortest frame (or ping) the receiver finds [s].
+
+    Returns
+    -------
+    float
+        ``GUARD_FRAMES`` frame durations: closer than any two frames.
+    """
+    return GUARD_FRAMES * frame_duration_s
+
+
+def overlap_for(span_s: float, frame_duration_s: float) -> float:
+    """Segment overlap giving a frame near a boundary the same context as in the whole recording [s].
+
+    Parameters
+    ----------
+    span_s : float
+        The longest a received frame lasts, with its tails and noise window [s].
+    frame_duration_s : float
+        The shortest frame [s] (sets the guard, :func:`guard_for`).
+
+    Returns
+    -------
+    float
+        The span, the guard, the detector's context and the noise windows [s].
+    """
+    return span_s + guard_for(frame_duration_s) + DETECTION_CONTEXT_S + NOISE_GAP_S + NOISE_WINDOW_S
+
+
 def _guard_s(rec: Recording) -> float:
-    return GUARD_FRAMES * rec.config.frame_duration_s
+    return guard_for(rec.config.frame_duration_s)
 
 
 def min_overlap_s(rec: Recording) -> float:
@@ -134,7 +171,7 @@ def default_overlap_s(rec: Recording) -> float:
     float
         :func:`min_overlap_s` plus the detector's context and noise windows [s].
     """
-    return min_overlap_s(rec) + DETECTION_CONTEXT_S + NOISE_GAP_S + NOISE_WINDOW_S
+    return overlap_for(_frame_span_s(rec), rec.config.frame_duration_s)
 
 
 @dataclass(frozen=True)

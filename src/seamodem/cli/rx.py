@@ -137,7 +137,9 @@ def _add_batch_options(p: argparse.ArgumentParser) -> None:
         "--segment",
         type=float,
         metavar="S",
-        help="cut recordings longer than S seconds into overlapping segments decoded in parallel",
+        help="cut recordings longer than S seconds into overlapping segments decoded in parallel; a live stream "
+             "with --array or --reference: new seconds between two runs of the receiver, so the most a record "
+             "waits after its frame (default 5 s, docs/live.md)",
     )
     g.add_argument(
         "--overlap",
@@ -372,7 +374,7 @@ def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) 
             Path(args.plot).mkdir(parents=True, exist_ok=True)
         if args.array:
             array = load_array(args.array)
-            records = array_records(array, inputs)
+            records = array_records(array, inputs, segment_s=args.segment if live else None)
             header |= array_header(array, args.array)
         else:
             on_frame = _plotter(Path(args.plot), args.plot_frames, inputs) if args.plot else None

@@ -16,6 +16,7 @@ measured; a second Ctrl-C quits at once).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import signal
 import sys
@@ -98,8 +99,13 @@ def check_live_options(args: argparse.Namespace) -> None:
     if args.device is None and len(args.recording) != 1:
         raise SeamodemError("recording: a live run reads one stream (give '-', a FIFO, or --device)")
     for name in ("segment", "overlap", "workers", "scheduler", "resume", "plot"):
+        if name == "segment" and (args.array or getattr(args, "reference", None)):
+            continue  # the array and reference receivers run in segments on a stream
         if getattr(args, name, None) not in (None, False):
-            raise SeamodemError(f"{name.replace('_', '-')}: not available on a live stream")
+            raise SeamodemError(f"{name.replace('_', '-')}: not available on a live stream"
+                                + (" (--segment: with --array or --reference only)" if name == "segment" else ""))
+    if args.segment is not None and not (args.segment > 0 and math.isfinite(args.segment)):
+        raise SeamodemError(f"segment: must be a positive number of seconds, got {args.segment!r}")
     if args.output != "-" and args.output_format != "jsonl":
         raise SeamodemError("output-format: chooses the format on stdout (-o -); a file's comes from its suffix")
 

@@ -165,6 +165,42 @@ def receive_array(
     return records, out_doas
 
 
+def open_array_source(path, positions_m: np.ndarray, assume: str | None = None):
+    """The recording of an array, checked: one channel per element; a flat or linear array's assumption warned.
+
+    Parameters
+    ----------
+    path : str, Path or RecordingSource
+        The recording (audio file or ``.mat``, :func:`~seamodem.io.mat.open_recording`), or an open source.
+    positions_m : numpy.ndarray, shape (n_elements, 3)
+        Nominal element positions [m].
+    assume : str, optional
+        As :func:`receive_array`.
+
+    Returns
+    -------
+    RecordingSource
+
+    Raises
+    ------
+    InputFileError
+        Unreadable file, or not one channel per element.
+    """
+    import warnings
+
+    from ...io.mat import open_recording
+    from ...io.source import RecordingSource
+
+    geometry = array_geometry(positions_m, assume)
+    source = path if isinstance(path, RecordingSource) else open_recording(path)
+    n_el = np.asarray(positions_m).shape[0]
+    if source.n_channels != n_el:
+        raise InputFileError(f"{path}: has {source.n_channels} channel(s), the array {n_el} elements")
+    if geometry.ambiguity:
+        warnings.warn(geometry.ambiguity, ReceiverWarning, stacklevel=3)
+    return source
+
+
 def receive_array_file(
     path,
     config: FrameConfig,
@@ -202,19 +238,8 @@ def receive_array_file(
     InputFileError
         Unreadable file, NaN or infinite samples, or not one channel per element.
     """
-    import warnings
-
-    from ...io.mat import open_recording
-
-    geometry = array_geometry(positions_m, assume)
-    from ...io.source import RecordingSource
-
-    source = path if isinstance(path, RecordingSource) else open_recording(path)
-    n_el = np.asarray(positions_m).shape[0]
-    if source.n_channels != n_el:
-        raise InputFileError(f"{path}: has {source.n_channels} channel(s), the array {n_el} elements")
-    if geometry.ambiguity:
-        warnings.warn(geometry.ambiguity, ReceiverWarning, stacklevel=2)
+    source = open_array_source(path, positions_m, assume)
+    n_el = source.n_channels
     if source.n_samples is None:  # a stream: read to its end
         x = np.concatenate(list(source.blocks(list(range(n_el)))) or [np.zeros((0, n_el))])
     else:
