@@ -63,6 +63,7 @@ def segmented_records(
     overlap_s: float,
     guard_s: float,
     segment_s: float = DEFAULT_SEGMENT_S,
+    partial_warnings: tuple[type[Warning], ...] = (),
 ) -> Iterator:
     """Records of a whole-recording receiver on a stream, each yielded once its frame is final.
 
@@ -82,6 +83,9 @@ def segmented_records(
         Two arrivals closer than this are one frame [s] (:func:`~seamodem.batch.decode.guard_for`).
     segment_s : float
         New stream between two runs [s].
+    partial_warnings : tuple of Warning classes
+        Warnings a run raises about what the buffer's edges cut (an incomplete packet): shown from the
+        last run only. Other warnings are shown once each.
 
     Yields
     ------
@@ -114,7 +118,8 @@ def segmented_records(
             records = receive(chunks[0], lo / fs) if len(chunks[0]) else []
         for w in caught:  # each warning once, and none about the buffer's end before the stream's
             text = str(w.message)
-            if (final or _BUFFER_END not in text) and text not in seen:
+            partial = _BUFFER_END in text or issubclass(w.category, partial_warnings)
+            if (final or not partial) and text not in seen:
                 seen.add(text)
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         t_lo, t_hi = done / fs - guard_s, cut / fs

@@ -260,7 +260,8 @@ def warm_up(args: argparse.Namespace) -> threading.Thread:
     return thread
 
 
-def write_live(args: argparse.Namespace, out, records, header: dict, source, run: LiveRun) -> int:
+def write_live(args: argparse.Namespace, out, records, header: dict, source, run: LiveRun, *,
+               fields=None, keep_unmatched: bool = False) -> int:
     """Write each record as it comes (flushed), the sidecar first; report how the stream ended; its exit code.
 
     Parameters
@@ -277,6 +278,10 @@ def write_live(args: argparse.Namespace, out, records, header: dict, source, run
         The live source (its ``end_reason`` and statistics).
     run : LiveRun
         The run's context (its ``stdout``; its ``event``, set here when the output closes).
+    fields : sequence of str, optional
+        The columns (default: the measurement record's).
+    keep_unmatched : bool
+        Write the arrivals without an emission too (the reference receiver's, range empty).
 
     Returns
     -------
@@ -289,7 +294,8 @@ def write_live(args: argparse.Namespace, out, records, header: dict, source, run
     header = header | {"live": {"input": source.name, "stall_timeout_s": args.stall_timeout,
                                 "block_s": getattr(source, "block_s", None)}}
     writer = MeasurementWriter(out, header, stream=stdout if out is None else None,
-                               kind=args.output_format if out is None else None)
+                               kind=args.output_format if out is None else None, keep_unmatched=keep_unmatched,
+                               **({} if fields is None else {"fields": fields}))
     if run.warm_up is not None:
         run.warm_up.join()
     status = _Status(source, enabled=args.status and not args.quiet)

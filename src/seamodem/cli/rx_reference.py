@@ -129,20 +129,78 @@ def write_reference_records(path: Path, records: list, metadata: dict) -> int:
     return write_measurements(path, records, metadata, fields=REFERENCE_FIELDS, keep_unmatched=True)
 
 
+def _reference_records(receiver, blocks, *, channels: list[int], source, emissions: dict, settings,
+                       t0_s: float = 0.0) -> list:
+    """The records of every reference found in ``blocks`` (first sample at stream time ``t0_s``), on the stream's clock.
+
+    The receiver's detections, the best channel's per ping, the matching reference's per overlap, packets
+    paired (:func:`~seamodem.receive.reference.pair_up`, its warnings raised), then one record each.
+    """
+    from ..batch.live import on_stream_clock
+    from ..receive.reference import best_per_detection, keep_matching_reference, pair_up, to_record
+
+    fs = source.sample_rate_hz
+    found = list(receiver.run(blocks))
+    for f in found:
+        f.channel = channels[f.channel]
+        lo = int((f.fit.t_arrival_s + t0_s) * fs)
+        f.clipped = source.stats.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * fs) + 1)
+    found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
+    found = keep_matching_reference(found)
+    c = settings.sound_speed_mps
+    pair_up(found, eps_max=settings.eps_max, sound_speed_mps=c, max_accel_mps2=settings.max_accel_mps2)
+    shifted = {name: None if e is None else e.shifted(t0_s) for name, e in emissions.items()}
+    return [on_stream_clock(to_record(f, shifted[f.reference.name], sound_speed_mps=c,
+                                      clock_offset_s=settings.clock_offset_s), t0_s) for f in found]
+
+
+def _live_reference_records(args, new_receiver, source, channels: list[int], emissions: dict, settings):
+    """A stream's records, the receiver run in overlapping segments, each yielded once its ping is final
+    (:func:`~seamodem.batch.live.segmented_records`; overlap and guard by the batch decoder's rules)."""
+    from ..batch.decode import guard_for, overlap_for
+    from ..batch.live import DEFAULT_SEGMENT_S, segmented_records
+    from ..receive.measure import FRAME_TAIL_S, NOISE_GAP_S, NOISE_WINDOW_S
+    from ..receive.reference.packets import PacketWarning
+
+    references = new_receiver().references
+    c = settings.sound_speed_mps
+    # the longest packet (first chirp to the end of the last) at the largest speed, its tails and noise window
+    span = max(max(t for t, _, _ in r.packet()) + r.duration_s for r in references) * (1 + settings.v_max_mps / c)
+    span += FRAME_TAIL_S + NOISE_GAP_S + NOISE_WINDOW_S
+    shortest = min(r.duration_s for r in references)
+    receiver = new_receiver()
+    # and the detector's own noise context before a ping
+    overlap = max(overlap_for(span, shortest), receiver.keep / receiver.plan.fs_bb + guard_for(shortest))
+
+    def receive(x, t0_s):
+        return _reference_records(new_receiver(), [x], channels=channels, source=source, emissions=emissions,
+                                  settings=settings, t0_s=t0_s)
+
+    return segmented_records(source.blocks(channels), source.sample_rate_hz, receive, overlap_s=overlap,
+                             guard_s=guard_for(shortest), partial_warnings=(PacketWarning,),
+                             segment_s=DEFAULT_SEGMENT_S if args.segment is None else args.segment)
+
+
 def run_reference(args: argparse.Namespace) -> int:
-    """Detect and measure every occurrence of the references in one recording."""
-    if len(args.recording) != 1:
+    """Detect and measure every occurrence of the references in one recording, or a stream (docs/live.md)."""
+    from .rx_live import check_live_options, live_requested
+
+    live = live_requested(args)
+    if live:
+        check_live_options(args)
+    elif len(args.recording) != 1:
         raise SeamodemError("reference: give one recording with --reference")
-    out = check_writable(args.output)
-    if out.suffix.lower() not in (".csv", ".jsonl"):
-        raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
+    out = None if args.output == "-" else check_writable(args.output)
+    if out is not None and out.suffix.lower() not in (".csv", ".jsonl"):
+        raise SeamodemError("output: must end in .csv or .jsonl" + (", or be '-' (stdout)" if live else "")
+                            + f", got {str(out)!r}")
     for name in ("segment", "workers", "scheduler", "resume", "plot"):
-        if getattr(args, name, None):
-            raise SeamodemError(f"{name}: not available with --reference")
+        if getattr(args, name, None) and not (live and name == "segment"):
+            raise SeamodemError(f"{name}: not available with --reference" + (" (but on a stream)" if name == "segment" else ""))
     from ..receive.settings import ReferenceSettings
 
-    recording = Path(args.recording[0])
-    recording_side = _recording_sidecar(recording)
+    recording = Path(args.recording[0]) if args.recording else Path(f"device {args.device}")
+    recording_side = None if args.device is not None else _recording_sidecar(recording)
     c, c_origin = sound_speed(args, recording_side)
     try:
         settings = ReferenceSettings(
@@ -155,19 +213,27 @@ def run_reference(args: argparse.Namespace) -> int:
         raise SeamodemError(f"{exc.parameter.replace('_', '-')}:{str(exc).partition(':')[2]}") from None
     if args.all_channels and args.channel is not None:
         raise SeamodemError("channel: give --channel N or --all-channels, not both")
+    from contextlib import nullcontext
 
+    from .rx_live import LiveRun
+
+    with LiveRun() if live else nullcontext() as run:
+        return _run_reference(args, out, recording, recording_side, settings, c_origin, run)
+
+
+def _run_reference(args, out, recording: Path, recording_side, settings, c_origin: str, run) -> int:
+    """:func:`run_reference` once the options are checked (``run``: the live run's context, or None)."""
     from ..io.matlab import is_mat
-    from ..io.live import is_live_input, open_live
     from ..io.source import open_recording
     from ..io.wav import RecordingWarning
     from ..transmit.reference import load_references
+    from .rx_live import open_live_input
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RecordingWarning)
         # --mat-variable names a .mat recording's variable, and a .mat template's (_with_template_options)
-        if is_live_input(str(recording)):  # a stream: read to its end, the records written then (docs/live.md)
-            source = open_live(str(recording), raw_format=args.raw, sample_rate_hz=args.sample_rate,
-                               n_channels=args.channels, stall_timeout_s=args.stall_timeout)
+        if run is not None:  # a stream: received in segments, each record written as its ping is final
+            source = open_live_input(args, run.event)
         else:
             source = open_recording(recording, mat_variable=args.mat_variable if is_mat(recording) else None,
                                     sample_rate_hz=args.sample_rate)
@@ -184,42 +250,18 @@ def run_reference(args: argparse.Namespace) -> int:
     c = settings.sound_speed_mps
     emissions = _reference_emissions(args, sidecar, references)
 
-    from ..receive.reference import (
-        ReferenceReceiver,
-        best_per_detection,
-        keep_matching_reference,
-        pair_up,
-        to_record,
-    )
+    from ..receive.reference import REFERENCE_FIELDS, ReferenceReceiver
+    from ..receive.reference.packets import PacketWarning
     from ..transmit.reference import reference_replica
 
     replicas = [reference_replica(r) for r in references]
-    receiver = ReferenceReceiver(
-        [rep.reference for rep in replicas],
-        source.sample_rate_hz,
-        settings=settings,
-        n_channels=len(channels),
-        replicas=replicas,
-    )
-    found = list(receiver.run(source.blocks(channels)))
-    for f in found:
-        f.channel = channels[f.channel]
-        lo = int(f.fit.t_arrival_s * source.sample_rate_hz)
-        f.clipped = source.stats.clipped_between(f.channel, lo, lo + int(f.reference.duration_s * source.sample_rate_hz) + 1)
-    found = best_per_detection(found, tolerance_s=0.5 * min(r.duration_s for r in receiver.references))
-    found = keep_matching_reference(found)
-    max_accel = settings.max_accel_mps2
-    from ..receive.reference.packets import PacketWarning
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", PacketWarning)
-        pair_up(found, eps_max=settings.eps_max, sound_speed_mps=c, max_accel_mps2=max_accel)
-    for w in caught:
-        print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
-    records = [
-        to_record(f, emissions[f.reference.name], sound_speed_mps=c, clock_offset_s=settings.clock_offset_s)
-        for f in found
-    ]
+    def new_receiver():
+        return ReferenceReceiver([rep.reference for rep in replicas], source.sample_rate_hz, settings=settings,
+                                 n_channels=len(channels), replicas=replicas)
+
+    receiver = new_receiver()
+    max_accel = settings.max_accel_mps2
     metadata = {
         "created_by": command_line(),
         "recording": str(recording),
@@ -235,16 +277,40 @@ def run_reference(args: argparse.Namespace) -> int:
                       "decimation": receiver.plan.decimation},
         "snr_definition": "in-band SNR over the reference's band [f_low, f_high] during the ping; E/N0 = SNR·B·T",
     }
+    if run is not None:
+        from ..batch.live import DEFAULT_SEGMENT_S
+        from ._common import reported_warnings
+        from .rx_live import write_live
+
+        metadata["segment_s"] = DEFAULT_SEGMENT_S if args.segment is None else args.segment
+        with reported_warnings("rx"):
+            records = _live_reference_records(args, new_receiver, source, channels, emissions, settings)
+            code = write_live(args, out, records, metadata, source, run, fields=REFERENCE_FIELDS,
+                              keep_unmatched=True)
+        _reference_notes(source, recording, emissions, None)
+        return code
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PacketWarning)
+        records = _reference_records(receiver, source.blocks(channels), channels=channels, source=source,
+                                     emissions=emissions, settings=settings)
+    for w in caught:
+        print(f"seamodem rx: warning: {w.message}", file=sys.stderr)
     n = write_reference_records(out, records, metadata)
-    for note in source.stats.notes(str(recording), source.sample_rate_hz):
-        print(f"seamodem rx: warning: {note}", file=sys.stderr)
-    if any(e is None for e in emissions.values()) and records:
-        print("seamodem rx: warning: emission times unknown for some references (no sidecar, no --emit-start): "
-              "their tof_s and range_m are empty", file=sys.stderr)
-    if n == 0:
-        print(f"seamodem rx: warning: no reference found in {recording}", file=sys.stderr)
+    _reference_notes(source, recording, emissions, n)
     if not args.quiet:
         per = {r.name: sum(rec.reference == r.name for rec in records) for r in receiver.references}
         listed = ", ".join(f"{k}: {v}" for k, v in per.items())
         print(f"wrote {out}: {n} detection{'s' if n != 1 else ''} ({listed}; {sound_speed_words(c, c_origin)})")
     return 0
+
+
+def _reference_notes(source, recording: Path, emissions: dict, n: int | None) -> None:
+    """The warnings after a run: clipping and silence, unknown emission times, nothing found (``n`` records;
+    None: a stream, whose writer reported its count)."""
+    for note in source.stats.notes(str(recording), source.sample_rate_hz):
+        print(f"seamodem rx: warning: {note}", file=sys.stderr)
+    if any(e is None for e in emissions.values()) and n != 0:
+        print("seamodem rx: warning: emission times unknown for some references (no sidecar, no --emit-start): "
+              "their tof_s and range_m are empty", file=sys.stderr)
+    if n == 0:
+        print(f"seamodem rx: warning: no reference found in {recording}", file=sys.stderr)

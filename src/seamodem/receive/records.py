@@ -374,8 +374,9 @@ class MeasurementWriter:
     """
 
     def __init__(self, path: str | Path | None, header: dict[str, Any], *, kind: str | None = None, stream=None,
-                 fields: Sequence[str] = FIELDS):
+                 fields: Sequence[str] = FIELDS, keep_unmatched: bool = False):
         self.path = None if path is None else Path(path)
+        self.keep_unmatched = keep_unmatched
         self.kind = kind or ("jsonl" if self.path is None else _format(self.path))
         self.fields = list(fields)
         self.rows, self.unmatched = 0, []
@@ -399,8 +400,9 @@ class MeasurementWriter:
             tmp.write_text(json.dumps(self.meta, indent=1) + "\n", encoding="utf-8")
 
     def write(self, rec: MeasurementRecord) -> bool:
-        """Write one record and flush it; False (not written) for an arrival without an emission."""
-        if not is_matched(rec):
+        """Write one record and flush it; False (not written) for an arrival without an emission, unless
+        ``keep_unmatched`` (then written too, its range empty, as :func:`write_measurements` does)."""
+        if not self.keep_unmatched and not is_matched(rec):
             self.unmatched.append(rec.t_arrival_s)
             return False
         if self._csv is not None:
