@@ -376,6 +376,10 @@ def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) 
             array = load_array(args.array)
             records = array_records(array, inputs, segment_s=args.segment if live else None)
             header |= array_header(array, args.array)
+            if live:  # received in segments of the stream (batch.live)
+                from ..batch.live import DEFAULT_SEGMENT_S
+
+                header |= {"segment_s": DEFAULT_SEGMENT_S if args.segment is None else args.segment}
         else:
             on_frame = _plotter(Path(args.plot), args.plot_frames, inputs) if args.plot else None
             records = receive_file(inputs.source, inputs.config, emissions=inputs.emissions, settings=inputs.settings,

@@ -224,7 +224,8 @@ def receive_array_file(
     Parameters
     ----------
     path : str, Path or RecordingSource
-        The recording, or an open source (a stream: read to its end, then received).
+        The recording, or an open source (a stream: read to its end, then received; ``seamodem rx -``
+        receives a stream in segments instead, ``seamodem.batch.live``).
     config, positions_m, emissions, settings, complex_gains, position_sigma_m, pilot, payloads, assume
         As :func:`receive_array`.
 
