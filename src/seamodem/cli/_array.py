@@ -42,7 +42,8 @@ def array_records(array, inputs, *, segment_s: float | None = None):
     -------
     list or iterator of MeasurementRecord
     """
-    from ..receive.array import open_array_source, receive_array, receive_array_file
+    from ..receive.array import receive_array, receive_array_file
+    from ..receive.array.receiver import open_array_source
 
     options = dict(settings=inputs.settings, complex_gains=array.complex_gains,
                    position_sigma_m=array.position_sigma_m, pilot=inputs.pilot, payloads=inputs.payloads,

@@ -88,7 +88,7 @@ from .doa import (
 )
 from .frontend import BLANKER_BLOCK, blank_like_reference, front_end_array
 from .geometry import MIN_AXIS_COMPONENT, ArrayGeometry, array_geometry, unit_vector
-from .receiver import open_array_source, receive_array, receive_array_file
+from .receiver import receive_array, receive_array_file
 
 __all__ = [
     "ArrayCorrelation",
@@ -105,6 +105,5 @@ __all__ = [
     "receive_array",
     "calibrate_array",
     "receive_array_file",
-    "open_array_source",
     "unit_vector",
 ]
