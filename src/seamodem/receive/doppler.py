@@ -46,7 +46,7 @@ __all__ = [
     "tone_track_eq9",
     "dichotomy_max",
     "tone_segment",
-    "log_amplitude_rate_hz",
+    "log_amplitude_rate",
 ]
 
 
@@ -367,7 +367,7 @@ class ToneFit:
     amp_rate_ms : float
         The same rate's mean square [1/s²], each term less its noise
         expectation but not clipped at 0 (unbiased: the receiver averages it
-        over frames, :func:`log_amplitude_rate_ms`).
+        over frames, :func:`log_amplitude_rate`).
     """
 
     offset_hz: float
@@ -467,7 +467,7 @@ _TONE_SEGMENTS = 16
 
 
 def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float) -> tuple[float, float]:
-    """:func:`log_amplitude_rate_hz` (and :func:`log_amplitude_rate_ms`) of ln|Σ y| over ``_TONE_SEGMENTS``
+    """:func:`log_amplitude_rate` of ln|Σ y| over ``_TONE_SEGMENTS``
     segments of equal weight (y = w·x·e^{−j2πft}, the tone at its fitted frequency), each segment's
     ln-amplitude noise variance noise_var·Σw²/(2|Σy|²)."""
     w2 = weights**2
@@ -484,18 +484,19 @@ def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise
     var = np.maximum(noise_var * energy / (2 * power), 1e-12)
     duration = float(times[-1] - times[0]) * _TONE_SEGMENTS / (_TONE_SEGMENTS - 1)
     log_amp = np.log(np.sqrt(power) / energy)
-    return (log_amplitude_rate_hz(log_amp, var, times, duration_s=duration),
-            log_amplitude_rate_ms(log_amp, var, times, duration_s=duration))
+    return log_amplitude_rate(log_amp, var, times, duration_s=duration)
 
 
-def log_amplitude_rate_hz(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float) -> float:
-    """RMS rate over a stretch of a phasor's log-amplitude [1/s], less what its noise gives it.
+def log_amplitude_rate(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float
+                       ) -> tuple[float, float]:
+    """RMS rate over a stretch of a phasor's log-amplitude [1/s], less what its noise gives it, and its
+    mean square unclipped [1/s²].
 
     A line and a parabola a0 + a1·t + a2·t² are fitted to the segments' log-amplitudes by weighted
     least squares; the rate's mean square over t uniform in ±D/2 is a1² + a2²·D²/3, each squared
-    coefficient taken less its variance (an unbiased estimate; 0 when below). A fading or beating
-    phasor's phase wanders at the same scale as its log-amplitude (the real and imaginary parts of one
-    analytic function): c·rate/(2πf) is then a speed error at carrier f (the whole-frame fit's
+    coefficient taken less its variance (an unbiased estimate). A fading or beating phasor's phase
+    wanders at the same scale as its log-amplitude (the real and imaginary parts of one analytic
+    function): c·rate/(2πf) is then a speed error at carrier f (the whole-frame fit's
     ``WholeFrameFit.amp_rate_hz``, the tone's ``ToneFit.amp_rate_hz``).
 
     Parameters
@@ -508,26 +509,22 @@ def log_amplitude_rate_hz(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray,
         The segments' times, about the stretch's middle [s].
     duration_s : float
         The stretch's duration D [s].
+
+    Returns
+    -------
+    rate_hz : float
+        √ of the mean square with each term clipped at 0: this frame's rate.
+    mean_square : float
+        The same terms unclipped, negative when the noise gave more than its expectation: unbiased, so
+        that its average over frames is too (``FrameMeasurer`` pools it; the clipped rate would average
+        to a positive scale on a channel that does not fade).
     """
-    return float(math.sqrt(_log_amplitude_rate_terms(log_amp, var, t_s, duration_s=duration_s, clip=True)))
-
-
-def log_amplitude_rate_ms(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float) -> float:
-    """:func:`log_amplitude_rate_hz`'s mean square [1/s²] unclipped: each term less its noise expectation,
-    negative when the noise gave more than the expectation. An unbiased estimate of the rate's mean square,
-    so that the average over frames is one too (``FrameMeasurer`` pools it; the clipped per-frame rate would
-    average to a positive scale on a channel that does not fade)."""
-    return _log_amplitude_rate_terms(log_amp, var, t_s, duration_s=duration_s, clip=False)
-
-
-def _log_amplitude_rate_terms(log_amp, var, t_s, *, duration_s: float, clip: bool) -> float:
     design = np.column_stack([np.ones(t_s.size), t_s, t_s**2])
     cov = np.linalg.inv(design.T @ (design / var[:, None]))
     a = cov @ (design.T @ (log_amp / var))
     slope, curve = a[1] ** 2 - cov[1, 1], a[2] ** 2 - cov[2, 2]
-    if clip:
-        slope, curve = max(slope, 0.0), max(curve, 0.0)
-    return float(slope + curve * duration_s**2 / 3)
+    k = duration_s**2 / 3
+    return float(math.sqrt(max(slope, 0.0) + max(curve, 0.0) * k)), float(slope + curve * k)
 
 
 def tone_track_eq9(

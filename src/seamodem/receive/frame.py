@@ -257,6 +257,22 @@ def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *,
 #: (``FrameMeasurer``): a fading channel's statistics hold over seconds to tens of seconds
 FADE_POOL_FRAMES = 5
 
+
+class _RatePool:
+    """A log-amplitude rate's unbiased mean squares (``log_amplitude_rate``'s second value) of the last
+    ``FADE_POOL_FRAMES`` frames; :attr:`rate_hz` is √ of their mean, 0 when that is negative or none."""
+
+    def __init__(self):
+        self._ms: collections.deque[float] = collections.deque(maxlen=FADE_POOL_FRAMES)
+
+    def add(self, mean_square: float) -> None:
+        if math.isfinite(mean_square):
+            self._ms.append(float(mean_square))
+
+    @property
+    def rate_hz(self) -> float:
+        return math.sqrt(max(0.0, float(np.mean(self._ms)))) if self._ms else 0.0
+
 #: radial acceleration a vehicle can have over a frame [m/s²]: an AUV's is below ~0.5 (circling at
 #: 15 m radius ~0.15); a fitted drift beyond it is phase wander (fading, a merged echo), not Doppler
 PLAUSIBLE_ACCEL_MPS2 = 0.5
@@ -507,9 +523,9 @@ class FrameMeasurer:
         self.on_frame = on_frame
         s = self.settings
         self.span_s = frame_span_s(config, v_max_mps=s.v_max_mps, sound_speed_mps=s.sound_speed_mps)
-        # the direct path's log-amplitude rate's mean square (unbiased, unclipped) of the last decoded frames
-        self._fade_ms: collections.deque[float] = collections.deque(maxlen=FADE_POOL_FRAMES)
-        self._tone_fade_ms: collections.deque[float] = collections.deque(maxlen=FADE_POOL_FRAMES)
+        # the fading's scale over the last frames (one frame's rate is one draw of it, its Doppler error
+        # another): the direct path's from decoded frames' whole-frame fits, and the tone's from every frame
+        self._fade_pool, self._tone_fade_pool = _RatePool(), _RatePool()
 
     def measure(self, detection: Detection, window: BasebandBuffers) -> MeasurementRecord:
         """Measure (and decode) one detection whose span the window holds.
@@ -657,9 +673,14 @@ class FrameMeasurer:
         sigma_tone = math.hypot(sigma_tone, m.tone.spread_hz * c / self.config.tone_hz)
         # and a fading tone (or one beating with a merged echo): its log-amplitude rate, the same scale as
         # its phase's wander (as the whole-frame fit's term)
-        # (its scale pooled over recent frames, as the whole-frame fit's: one frame's rate is one draw)
-        tone_pool = self._pooled_tone_rate_hz(m.tone)
-        sigma_tone = math.hypot(sigma_tone, max(m.tone.amp_rate_hz, tone_pool) * c / (2 * math.pi * self.config.tone_hz))
+        # (its scale pooled over recent frames, as the whole-frame fit's: one frame's rate is one draw). The
+        # tone's pool sets the tone's σ only: the tone sums every path, so among echoes its amplitude beats
+        # where the direct path's does not (given to the data band too, it took the corpus's steep and
+        # impulsive families' RMS err/σ from 0.7–0.8 to 0.03–0.3; a fading single path at −2.8 dB: tone rows
+        # 4.3σ and 3.8σ → 2.0σ with it)
+        self._tone_fade_pool.add(m.tone.amp_rate_ms)
+        sigma_tone = math.hypot(sigma_tone, max(m.tone.amp_rate_hz, self._tone_fade_pool.rate_hz)
+                                * c / (2 * math.pi * self.config.tone_hz))
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
@@ -700,8 +721,13 @@ class FrameMeasurer:
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
             wf, first, source = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
+            # decoded frames feed the pool (wrong decisions move a fit's amplitudes), fits on decisions use it:
+            # a frame whose amplitude stayed flat had the fit's noise alone as σ while its phase wandered (the
+            # corpus's fading family, whole-frame v_r 0.91 within 3σ, worst 9σ; pooled over 5 frames 0.98)
+            if source == "whole_frame" and wf.amp_rate_ms is not None:
+                self._fade_pool.add(float(wf.amp_rate_ms[first]))
             sigma_v_un, sigma_tau_un = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
-                                                         pooled_amp_rate_hz=self._pooled_amp_rate_hz(wf, first, source))
+                                                         pooled_amp_rate_hz=self._fade_pool.rate_hz)
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
@@ -723,34 +749,6 @@ class FrameMeasurer:
         return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank, v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
                     n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_rejected), None
-
-    def _pooled_amp_rate_hz(self, wf: WholeFrameFit, first: int, source: str) -> float:
-        """The direct path's log-amplitude rate [1/s] over the last ``FADE_POOL_FRAMES`` decoded frames (this
-        one included when decoded): √ of the mean of their unbiased mean squares, 0 when that is negative.
-
-        One frame's rate is one draw of the fading's scale, its Doppler error another: a frame whose
-        amplitude happened to stay flat got a σ of the fit's noise alone while its phase wandered (the
-        corpus's fading family, whole-frame v_r 0.91 within 3σ, worst 9σ; pooled over 5 frames 0.98,
-        worst 3.8σ). Decisions fits are not added (wrong decisions move the amplitudes), but use the pool.
-        The pool is the stream's: the first frames of a recording, or of a batch segment, have fewer.
-        """
-        if source == "whole_frame" and wf.amp_rate_ms is not None:
-            self._fade_ms.append(float(wf.amp_rate_ms[first]))
-        if not self._fade_ms:
-            return 0.0
-        return math.sqrt(max(0.0, float(np.mean(self._fade_ms))))
-
-    def _pooled_tone_rate_hz(self, tone) -> float:
-        """The tone's log-amplitude rate [1/s] pooled over the last ``FADE_POOL_FRAMES`` frames with a tone (this
-        one included), as :meth:`_pooled_amp_rate_hz`; every frame's tone counts (decoded or not). It sets the
-        tone's σ only: the tone sums every path, so among echoes its amplitude beats where the direct path's
-        does not (given to the data band too, it took the corpus's steep and impulsive families' RMS err/σ
-        from 0.7–0.8 to 0.03–0.3). A corpus fading single path at −2.8 dB: tone rows 4.3σ and 3.8σ → 2.0σ."""
-        if math.isfinite(tone.amp_rate_ms):
-            self._tone_fade_ms.append(float(tone.amp_rate_ms))
-        if not self._tone_fade_ms:
-            return 0.0
-        return math.sqrt(max(0.0, float(np.mean(self._tone_fade_ms))))
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
         """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""

@@ -44,7 +44,7 @@ from numba import njit
 
 from ..config import FrameConfig
 from .bounds import gabor_bandwidth_hz
-from .doppler import log_amplitude_rate_hz, log_amplitude_rate_ms
+from .doppler import log_amplitude_rate
 
 __all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
 
@@ -523,8 +523,7 @@ def fit_whole_frame(
         # fit's own σ
         var = counts * noise_var / (2 * np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny))
         log_amp = np.log(np.maximum(np.abs(zs), np.finfo(float).tiny))
-        amp_rate[p] = log_amplitude_rate_hz(log_amp, var, ts, duration_s=config.frame_duration_s)
-        amp_rate_ms[p] = log_amplitude_rate_ms(log_amp, var, ts, duration_s=config.frame_duration_s)
+        amp_rate[p], amp_rate_ms[p] = log_amplitude_rate(log_amp, var, ts, duration_s=config.frame_duration_s)
         d_seg, wt = last_timing[p]
         dm = float(np.sum(wt * d_seg) / np.sum(wt))
         spread2 = float(np.sum(wt * (d_seg - dm) ** 2) / np.sum(wt))
