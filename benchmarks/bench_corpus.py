@@ -151,10 +151,15 @@ def main(argv=None) -> int:
     ap.add_argument("--depths", action="store_true",
                     help="give the receiver the beacon's and the vehicle's depths (ReceiverSettings.beacon_depth_m, "
                          "vehicle_depth_m), as a vehicle knows them")
+    ap.add_argument("--families", default=",".join(FAMILIES),
+                    help="comma-separated families to run (default all; seeds as in the full run)")
     args = ap.parse_args(argv)
+    only = [f.strip() for f in args.families.split(",")]
+    if unknown := sorted(set(only) - set(FAMILIES)):
+        ap.error(f"unknown family {', '.join(unknown)} (choose from {', '.join(FAMILIES)})")
     seed = int.from_bytes(os.urandom(3), "little") if args.fresh else args.seed
     jobs = [(fam, seed * 1000 + 37 * i + j, args.frames, True, args.depths) for j, fam in enumerate(FAMILIES)
-            for i in range(args.recordings)]
+            for i in range(args.recordings) if fam in only]
     if not args.no_single_path:
         jobs += [(f, s, n, False, d) for f, s, n, _, d in jobs]
     t0 = time.perf_counter()

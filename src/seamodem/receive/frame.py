@@ -54,6 +54,7 @@ __all__ = [
     "two_carrier_sigma_mps",
     "time_scale_delay_s",
     "unmodelled_sigmas",
+    "channel_shape_delay_s",
 ]
 
 _BLAS = None
@@ -273,6 +274,30 @@ class _RatePool:
     def rate_hz(self) -> float:
         return math.sqrt(max(0.0, float(np.mean(self._ms)))) if self._ms else 0.0
 
+
+class _CurvaturePool:
+    """The direct path's channel curvature (``WholeFrameFit.curvature_ms_s4``, unbiased, with its noise σ)
+    over the last ``FADE_POOL_FRAMES`` decoded frames. :attr:`delay_s` is the arrival's bias bound that
+    their mean gives, when that mean stands 3 of its σ out of the noise (0 otherwise): at 1 km, a surface
+    image 17 µs behind, the ends near the surface, bends one frame's channel by 2–3 of its σ at 20 dB
+    (12 mm of bias, σ 0.3 mm), five frames' by 5–7."""
+
+    def __init__(self):
+        self._ms: collections.deque[tuple[float, float]] = collections.deque(maxlen=FADE_POOL_FRAMES)
+
+    def add(self, mean_square: float, noise: float) -> None:
+        if math.isfinite(mean_square) and math.isfinite(noise):
+            self._ms.append((float(mean_square), float(noise)))
+
+    @property
+    def delay_s(self) -> float:
+        if not self._ms:
+            return 0.0
+        ms, noise = np.array(self._ms).T
+        mean, sd = float(np.mean(ms)), float(np.sqrt(np.sum(noise**2))) / len(ms)
+        return mean**0.25 / math.sqrt(3) if mean > 3 * sd else 0.0  # σ of a uniform spread over the bound
+
+
 #: radial acceleration a vehicle can have over a frame [m/s²]: an AUV's is below ~0.5 (circling at
 #: 15 m radius ~0.15); a fitted drift beyond it is phase wander (fading, a merged echo), not Doppler
 PLAUSIBLE_ACCEL_MPS2 = 0.5
@@ -281,7 +306,7 @@ _K_FADE, _K_ACCEL, _K_MERGE = 1.0, 1.0, 1.0
 
 
 def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sound_speed_mps: float,
-                      pooled_amp_rate_hz: float = 0.0) -> tuple[float, float]:
+                      pooled_amp_rate_hz: float = 0.0, pooled_merge_delay_s: float = 0.0) -> tuple[float, float]:
     """σ terms [m/s], [s] of what the whole-frame fit of a path shows but does not model.
 
     Parameters
@@ -297,6 +322,10 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
     pooled_amp_rate_hz : float
         The direct path's log-amplitude rate pooled over recent frames
         (``FrameMeasurer``): the larger of it and this frame's is the scale.
+    pooled_merge_delay_s : float
+        The bias bound of a merged echo from the channel's curvature pooled
+        over recent frames (``FrameMeasurer``): the larger of it and this
+        frame's ``tilt_delay_s`` is counted.
 
     Returns
     -------
@@ -317,9 +346,17 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
     fade = _K_FADE * c / (2 * math.pi * f0) * amp
     drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
     # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
-    tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
     sigma_v = math.hypot(fade, drift)
-    return sigma_v, math.hypot(_K_MERGE * tilt, time_scale_delay_s(sigma_v, config, sound_speed_mps=c))
+    return sigma_v, math.hypot(channel_shape_delay_s(wf, first, pooled_merge_delay_s),
+                               time_scale_delay_s(sigma_v, config, sound_speed_mps=c))
+
+
+def channel_shape_delay_s(wf: WholeFrameFit, first: int, pooled_merge_delay_s: float = 0.0) -> float:
+    """σ [s] of the direct path's arrival from its channel's shape (a merged echo): the larger of the fit's
+    ``tilt_delay_s`` and ``pooled_merge_delay_s``. The pilot's arrival sees the same channel, so this
+    bias is common to both arrivals (not in their gap)."""
+    tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
+    return _K_MERGE * max(tilt, pooled_merge_delay_s)
 
 
 def time_scale_delay_s(sigma_v_mps: float, config: FrameConfig, *, sound_speed_mps: float) -> float:
@@ -526,6 +563,7 @@ class FrameMeasurer:
         # the fading's scale over the last frames (one frame's rate is one draw of it, its Doppler error
         # another): the direct path's from decoded frames' whole-frame fits, and the tone's from every frame
         self._fade_pool, self._tone_fade_pool = _RatePool(), _RatePool()
+        self._curvature_pool = _CurvaturePool()
 
     def measure(self, detection: Detection, window: BasebandBuffers) -> MeasurementRecord:
         """Measure (and decode) one detection whose span the window holds.
@@ -604,11 +642,14 @@ class FrameMeasurer:
             # covers it (as the tone's covers its gap to the bank)
             # on decisions (CRC failed: raw BER 0.3–0.5 in multipath at 0 dB, the pilot's arrival 1.6–2× its
             # bound off) the gap less its expectation: beyond 3σ only left those frames 3–5σ off
+            # the channel's shape (a merged echo) biases both arrivals alike: it is not in their gap, and goes
+            # to the σ of the one used (in the gap's expectation on decisions, a fit 39 mm off kept σ 2.8 mm)
+            t_fit, sigma_fit, sigma_shape = timing
             gap_k = 9 if doppler["v_r_source"] == "whole_frame" else 1
-            excess = (timing[0] - t_arr) ** 2 - gap_k * (timing[1] ** 2 + sigma_tau**2)
-            if doppler["v_r_source"] == "whole_frame" or timing[1] < sigma_tau:
-                t_arr, sigma_tau = timing
-            sigma_tau = math.sqrt(sigma_tau**2 + max(0.0, excess))
+            excess = (t_fit - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
+            if doppler["v_r_source"] == "whole_frame" or sigma_fit < sigma_tau:
+                t_arr, sigma_tau = t_fit, sigma_fit
+            sigma_tau = math.sqrt(sigma_tau**2 + sigma_shape**2 + max(0.0, excess))
         sigma_tau = math.hypot(sigma_tau, sigma_first)
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
@@ -726,8 +767,12 @@ class FrameMeasurer:
             # corpus's fading family, whole-frame v_r 0.91 within 3σ, worst 9σ; pooled over 5 frames 0.98)
             if source == "whole_frame" and wf.amp_rate_ms is not None:
                 self._fade_pool.add(float(wf.amp_rate_ms[first]))
+            if source == "whole_frame" and wf.curvature_ms_s4 is not None:
+                self._curvature_pool.add(float(wf.curvature_ms_s4[first]), float(wf.curvature_noise_s4[first]))
+            pooled_merge = self._curvature_pool.delay_s
             sigma_v_un, sigma_tau_un = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
-                                                         pooled_amp_rate_hz=self._fade_pool.rate_hz)
+                                                         pooled_amp_rate_hz=self._fade_pool.rate_hz,
+                                                         pooled_merge_delay_s=pooled_merge)
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
@@ -737,12 +782,14 @@ class FrameMeasurer:
                 if source == "whole_frame" else 0.0
             sigma = math.hypot(sigma, sigma_2c)
             sigma_tau_un = math.hypot(sigma_tau_un, time_scale_delay_s(sigma_2c, self.config, sound_speed_mps=c))
+            shape = channel_shape_delay_s(wf, first, pooled_merge)  # (in sigma_tau_un: common to both arrivals)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first])), \
-                (float(wf.delays_s[first]), math.hypot(float(wf.sigma_delay_s[first]) * inflation, sigma_tau_un))
+                (float(wf.delays_s[first]),
+                 math.sqrt(max(float(wf.sigma_delay_s[first] * inflation) ** 2 + sigma_tau_un**2 - shape**2, 0.0)), shape)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank, v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None
