@@ -117,7 +117,9 @@ def test_frame_demo_writes_what_it_wrote_before_the_waveform_option(tmp_path):
     ``--waveform``) and rewritten once at the merge of issues 27 and 29, whose changes were on purpose
     (the records' one-type-per-column notation and schema, the demo's filters weighting each frame by its
     record's σ): the measurements' numbers were equal to
-    1e-9 across that rewrite, the inertial and batch tracks moved by ≤ 1 cm (the weights). Rewrite them
+    1e-9 across that rewrite, the inertial and batch tracks moved by ≤ 1 cm (the weights). measurements.csv
+    was rewritten again for issue 25's frame-to-frame fading pool (σ columns only, ≤ 7e-4 relative; the
+    tracks equal to 1e-12). Rewrite them
     (``seamodem demo --duration 6 --no-plots -q -o DIR``) only for a change that is meant to alter them."""
     out = tmp_path / "demo"
     assert main(["demo", "--duration", "6", "--no-plots", "-q", "-o", str(out)]) == 0

@@ -1,6 +1,8 @@
 """Decoding through an echo with its own Doppler: the second pass cancels it at its own delay, gain and Doppler
 (receive/demodulate.py decode_through_echoes, receive/compensate.py echo_contributions)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -47,8 +49,12 @@ def test_an_echo_with_its_own_doppler_is_cancelled_and_the_frame_decodes(recordi
     assert new[0].payload_hex == FRAME.payload.hex()
     # decoded on the second pass (its passes counted after the first pass's 3); the others untouched
     assert new[0].decode_passes > ReceiverSettings().turbo_passes
+    # (σ's within 1 %: a decoded frame feeds the stream's fading pools, which the next frames' σ's use)
     for a, b in zip(old[1:], new[1:]):
-        assert a == b
+        pooled = ("sigma_range_m", "sigma_v_r_mps")
+        assert dataclasses.replace(a, **{k: 0.0 for k in pooled}) == dataclasses.replace(b, **{k: 0.0 for k in pooled})
+        for k in pooled:
+            assert getattr(a, k) == pytest.approx(getattr(b, k), rel=1e-2), k
 
 
 def test_a_frame_the_second_pass_does_not_recover_keeps_its_first_pass():

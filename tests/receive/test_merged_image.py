@@ -82,3 +82,4 @@ def test_without_an_image_the_pool_stays_silent():
     sigmas = np.array([records[k].sigma_range_m for k in range(8)])
     assert np.all(np.abs(errors) <= 3 * sigmas), (errors, sigmas)
     assert np.all(sigmas < 0.002), sigmas
+
