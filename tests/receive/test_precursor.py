@@ -66,3 +66,21 @@ def test_a_direct_path_below_the_first_path_share_leaves_the_echo_with_a_sigma_t
     for k, r in records.items():
         err = r.range_m - C * tof[k]
         assert abs(err) <= 3 * r.sigma_range_m, (k, err, r.sigma_range_m)
+
+
+def test_a_noise_peak_a_pilot_length_early_is_not_taken_for_the_arrival():
+    # the corpus's steep family, one path at −2.8 dB (benchmarks/corpus.py, seed 5839417481): frame 5's
+    # precursor search found a noise peak 0.35 of the path 106 symbols early and took it as the arrival —
+    # before its emission, so the record went to frame 4, 1.47 km off with σ 22 mm. The search's noise test
+    # now counts the lags it searches (multipath._PRECURSOR_NOISE_DEVIATIONS)
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from bench_corpus import run_recording
+
+    rows = {r["frame"]: r for r in run_recording("steep", 5839417481, 6, echoes=False)}
+    assert rows[5]["detected"] and rows[4]["detected"]
+    for k in (4, 5):
+        err = rows[k]["range_m"] - rows[k]["range_true_m"]
+        assert abs(err) <= 3 * rows[k]["sigma_range_m"], (k, err, rows[k]["sigma_range_m"])

@@ -725,8 +725,9 @@ class FrameMeasurer:
                  excess: float, snr_direct_db: float, range_m: float = math.nan
                  ) -> tuple[dict, tuple[float, float, float] | None]:
         """v_r_mps, its σ and source (and the bank's σ, ``sigma_bank``): the direct path's whole-frame Doppler
-        when decoded, else the tone ML; and (arrival [s], its σ [s]) of the direct path from the whole-frame
-        fit, or None.
+        when decoded, else the tone ML; and (arrival [s], its σ [s], the channel shape's σ [s], which the
+        pilot's arrival shares: ``channel_shape_delay_s``) of the direct path from the whole-frame fit, or
+        None. ``range_m`` (nan when unknown) takes the spreading out of the frames' amplitude change.
 
         The tone sums every path; it is flagged as multipath-biased when it and
         the direct path's own estimate (whole-frame fit, else the pilot bank)
