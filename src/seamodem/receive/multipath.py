@@ -85,10 +85,8 @@ _RESPONSE_TABLE_RATE = 512
 
 @lru_cache(maxsize=8)
 def _response_table(rolloff: float, rho: tuple, half_extent_symbols: int) -> UniformTable:
-    """u ↦ R(uT) = Σ_d ρ_d rc((u − d)T) for |u| ≤ half_extent, by linear interpolation in a table
-    (ρ_d for d = −L…L, L = (len(rho) − 1)/2)."""
-    half = (len(rho) - 1) // 2
-    lags = np.arange(-half, half + 1)
+    """u ↦ R(uT) = Σ_d ρ_d rc((u − d)T) for |u| ≤ half_extent, by linear interpolation in a table."""
+    lags = np.arange(-_SIDELOBE_LAGS, _SIDELOBE_LAGS + 1)
     return UniformTable(
         lambda u: sum(r * raised_cosine(u - d, 1.0, rolloff) for d, r in zip(lags, rho)),
         half_extent_symbols,
@@ -188,7 +186,6 @@ def fit_paths(
     first_path_fraction: float = 0.3,
     initial_delays_s=None,
     window_s: tuple[float, float] | None = None,
-    sidelobe_lags: int = _SIDELOBE_LAGS,
     noise_deviations: float = 3.5,
 ) -> PathFit:
     """Sparse multipath fit of the pilot correlation within ± a few symbols of ``t_start_s``.
@@ -213,17 +210,13 @@ def fit_paths(
         Paths already known (default: ``t_start_s`` alone); new ones are added to them.
     window_s : (float, float), optional
         Candidate frame starts searched [s] (default ``t_start_s`` ± ``half_window_symbols``).
-    sidelobe_lags : int
-        The pilot's aperiodic autocorrelation ρ_d is in each path's modelled response for
-        |d| ≤ this many symbols; a window that reaches further from a path needs them all
-        (:func:`find_precursors`), or the pilot's own sidelobes there pass for paths.
     noise_deviations : float
         The noise test's deviations (3.5 above).
     """
     T = config.symbol_period_s
     a = np.asarray(pilot, dtype=complex)
     n_p = len(a)
-    lags = np.arange(-min(sidelobe_lags, n_p - 1), min(sidelobe_lags, n_p - 1) + 1)
+    lags = np.arange(-_SIDELOBE_LAGS, _SIDELOBE_LAGS + 1)
     rho = np.array([np.vdot(a[: n_p - abs(d)], a[abs(d) :]).real for d in lags])  # real ±1 pilot: symmetric
     # the received pilot is compressed by 1 + ε: a template at frame times τ_a + i(1 + ε)/fs
     # lies on the recording's grid; uncompressed, the fit would be τ_centroid·ε early (33 µs at 3 m/s)
@@ -457,11 +450,8 @@ def find_precursors(
     returned when it finds none, so a frame without a precursor is measured
     as before. A precursor at least 0.3 of the strongest becomes the first
     path; a weaker one is left for the arrival's σ
-    (:func:`~seamodem.receive.frame.earlier_path_gap_s`). Each path's response
-    holds the pilot's whole aperiodic autocorrelation here: a candidate d
-    symbols early overlaps Np − d of the path's own pilot symbols, a known
-    sidelobe (ρ_d for |d| ≤ 12 only before). And the noise test counts the
-    lags searched, (Np + 12)·(1 + α) independent complex lags against ±12
+    (:func:`~seamodem.receive.frame.earlier_path_gap_s`). The noise test counts
+    the lags searched, (Np + 12)·(1 + α) independent complex lags against ±12
     symbols': :data:`_PRECURSOR_NOISE_DEVIATIONS` (4.1) instead of 3.5 keeps a
     noise peak below 1e-5 per frame (at 3.5 a single path at −2.8 dB took a
     noise peak 0.35 of it, 106 symbols early, as its arrival: the frame index
@@ -471,7 +461,7 @@ def find_precursors(
     T = config.symbol_period_s / (1 + eps)
     found = fit_paths(r, fs, t0_s, config=config, pilot=pilot, t_start_s=t_start_s, eps=eps, es_n0=es_n0,
                       initial_delays_s=paths.delays_s, max_paths=len(paths.delays_s) + max_precursors,
-                      window_s=(t_start_s - n_p * T, t_start_s + half_window_symbols * T), sidelobe_lags=n_p - 1,
+                      window_s=(t_start_s - n_p * T, t_start_s + half_window_symbols * T),
                       noise_deviations=_PRECURSOR_NOISE_DEVIATIONS)
     if len(found.delays_s) == len(paths.delays_s):
         return paths
