@@ -259,43 +259,44 @@ def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *,
 FADE_POOL_FRAMES = 5
 
 
-class _RatePool:
+class _FramePool:
+    """Unbiased per-frame estimates (with their noise σ) over the last ``FADE_POOL_FRAMES`` frames."""
+
+    def __init__(self):
+        self._items: collections.deque[tuple[float, float]] = collections.deque(maxlen=FADE_POOL_FRAMES)
+
+    def add(self, value: float, noise_sd: float = 0.0) -> None:
+        if math.isfinite(value) and math.isfinite(noise_sd):
+            self._items.append((float(value), float(noise_sd)))
+
+    def standing_mean(self, k: float) -> float:
+        """The frames' mean when it stands ``k`` of its σ out of 0, else 0 (0 with none)."""
+        if not self._items:
+            return 0.0
+        values, noise = np.array(self._items).T
+        mean = float(np.mean(values))
+        return mean if mean > k * float(np.sqrt(np.sum(noise**2))) / len(values) else 0.0
+
+
+class _RatePool(_FramePool):
     """A log-amplitude rate's unbiased mean squares (``log_amplitude_rate``'s second value) of the last
     ``FADE_POOL_FRAMES`` frames; :attr:`rate_hz` is √ of their mean, 0 when that is negative or none."""
 
-    def __init__(self):
-        self._ms: collections.deque[float] = collections.deque(maxlen=FADE_POOL_FRAMES)
-
-    def add(self, mean_square: float) -> None:
-        if math.isfinite(mean_square):
-            self._ms.append(float(mean_square))
-
     @property
     def rate_hz(self) -> float:
-        return math.sqrt(max(0.0, float(np.mean(self._ms)))) if self._ms else 0.0
+        return math.sqrt(self.standing_mean(0.0))
 
 
-class _CurvaturePool:
+class _CurvaturePool(_FramePool):
     """The direct path's channel curvature (``WholeFrameFit.curvature_ms_s4``, unbiased, with its noise σ)
     over the last ``FADE_POOL_FRAMES`` decoded frames. :attr:`delay_s` is the arrival's bias bound that
     their mean gives, when that mean stands 3 of its σ out of the noise (0 otherwise): at 1 km, a surface
     image 17 µs behind, the ends near the surface, bends one frame's channel by 2–3 of its σ at 20 dB
     (12 mm of bias, σ 0.3 mm), five frames' by 5–7."""
 
-    def __init__(self):
-        self._ms: collections.deque[tuple[float, float]] = collections.deque(maxlen=FADE_POOL_FRAMES)
-
-    def add(self, mean_square: float, noise: float) -> None:
-        if math.isfinite(mean_square) and math.isfinite(noise):
-            self._ms.append((float(mean_square), float(noise)))
-
     @property
     def delay_s(self) -> float:
-        if not self._ms:
-            return 0.0
-        ms, noise = np.array(self._ms).T
-        mean, sd = float(np.mean(ms)), float(np.sqrt(np.sum(noise**2))) / len(ms)
-        return mean**0.25 / math.sqrt(3) if mean > 3 * sd else 0.0  # σ of a uniform spread over the bound
+        return self.standing_mean(3.0) ** 0.25 / math.sqrt(3)  # σ of a uniform spread over the bound
 
 
 #: frames further apart than this [s] are not compared for the slow fading (``FrameMeasurer._frame_to_frame``)
@@ -802,17 +803,17 @@ class FrameMeasurer:
             # decoded frames feed the pool (wrong decisions move a fit's amplitudes), fits on decisions use it:
             # a frame whose amplitude stayed flat had the fit's noise alone as σ while its phase wandered (the
             # corpus's fading family, whole-frame v_r 0.91 within 3σ, worst 9σ; pooled over 5 frames 0.98)
-            if source == "whole_frame" and wf.amp_rate_ms is not None:
-                self._fade_pool.add(float(wf.amp_rate_ms[first]))
             if source == "whole_frame":
+                if wf.amp_rate_ms is not None:
+                    self._fade_pool.add(float(wf.amp_rate_ms[first]))
+                if wf.curvature_ms_s4 is not None:
+                    self._curvature_pool.add(float(wf.curvature_ms_s4[first]), float(wf.curvature_noise_s4[first]))
                 self._frame_to_frame(wf, first, range_m)
-            if source == "whole_frame" and wf.curvature_ms_s4 is not None:
-                self._curvature_pool.add(float(wf.curvature_ms_s4[first]), float(wf.curvature_noise_s4[first]))
             pooled_merge = self._curvature_pool.delay_s
-            sigma_v_un, sigma_tau_un = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
-                                                         pooled_amp_rate_hz=max(self._fade_pool.rate_hz,
-                                                                                self._slow_fade_pool.rate_hz),
-                                                         pooled_merge_delay_s=pooled_merge)
+            sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
+                                              pooled_amp_rate_hz=max(self._fade_pool.rate_hz,
+                                                                     self._slow_fade_pool.rate_hz),
+                                              pooled_merge_delay_s=pooled_merge)
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
@@ -821,15 +822,17 @@ class FrameMeasurer:
                                              sound_speed_mps=c) \
                 if source == "whole_frame" else 0.0
             sigma = math.hypot(sigma, sigma_2c)
-            sigma_tau_un = math.hypot(sigma_tau_un, time_scale_delay_s(sigma_2c, self.config, sound_speed_mps=c))
-            shape = channel_shape_delay_s(wf, first, pooled_merge)  # (in sigma_tau_un: common to both arrivals)
+            # the fit's own arrival σ (its noise, and the time scale the Doppler's unmodelled σ gives the symbol
+            # instants), and apart from it the channel shape's, which the pilot's arrival shares
+            sigma_tau_fit = math.hypot(float(wf.sigma_delay_s[first]) * inflation, time_scale_delay_s(
+                math.hypot(sigma_v_un, sigma_2c), self.config, sound_speed_mps=c))
+            shape = channel_shape_delay_s(wf, first, pooled_merge)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first])), \
-                (float(wf.delays_s[first]),
-                 math.sqrt(max(float(wf.sigma_delay_s[first] * inflation) ** 2 + sigma_tau_un**2 - shape**2, 0.0)), shape)
+                (float(wf.delays_s[first]), sigma_tau_fit, shape)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank, v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None
