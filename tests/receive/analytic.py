@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from seamodem.transmit.frame import Frame, frame_symbol_times, tone_envelope
+from seamodem.transmit.frame import Frame, build_frame, frame_symbol_times, tone_envelope
 from seamodem.transmit.pulse import srrc_pulse, srrc_truncation_energy
 
 
@@ -73,3 +73,17 @@ def awgn_sigma(config, snr_db: float, gain: float = 1.0) -> float:
     """
     p = gain**2 * (1 - config.tone_power_share)
     return float(np.sqrt(p * config.sample_rate_hz / (2 * config.bandwidth_hz * 10 ** (snr_db / 10))))
+
+
+def multipath_recording(config, payloads, t_emit_s, tof_s, paths, *, v_mps: float, snr_db: float, rng,
+                        tail_s: float = 0.6) -> np.ndarray:
+    """One frame per payload emitted at ``t_emit_s`` and heard ``tof_s`` later along each of ``paths``
+    ((extra delay [s], gain) pairs), at speed ``v_mps``, in white noise of in-band SNR ``snr_db`` (drawn
+    from ``rng``); the recording runs ``tail_s`` past the last emission's period of 1 s."""
+    t = np.arange(int((len(payloads) + tail_s) * config.sample_rate_hz)) / config.sample_rate_hz
+    x = np.zeros(t.size)
+    for k, payload in enumerate(payloads):
+        frame = build_frame(config, payload)
+        for delay, gain in paths:
+            x += received_frame(frame, t, t_arrival_s=t_emit_s[k] + tof_s[k] + delay, v_mps=v_mps, gain=gain)
+    return x + awgn_sigma(config, snr_db) * rng.standard_normal(t.size)

@@ -15,9 +15,8 @@ import pytest
 
 from seamodem import get_preset
 from seamodem.receive import Emissions, Receiver, ReceiverSettings
-from seamodem.transmit.frame import build_frame
 
-from analytic import awgn_sigma, received_frame
+from analytic import multipath_recording
 
 CFG = get_preset("jmse2024")
 FS = CFG.sample_rate_hz
@@ -44,15 +43,10 @@ def test_the_bias_of_a_weaker_merged_echo_is_within_the_curvature_bound(cycles):
 def _recording(seed: int, *, n_frames: int, snr_db: float, delta_s: float, image_gain: float):
     rng = np.random.default_rng(seed)
     payloads = [f"mirror {k}".encode() for k in range(n_frames)]
-    t = np.arange(int((n_frames + 0.6) * FS)) / FS
-    x = np.zeros(t.size)
     t_emit = 0.1 + np.arange(n_frames) * 1.0
     tof = 0.55 + rng.uniform(0, 0.002, n_frames)
-    for k in range(n_frames):
-        frame = build_frame(CFG, payloads[k])
-        x += received_frame(frame, t, t_arrival_s=t_emit[k] + tof[k], v_mps=V, gain=1.0)
-        x += received_frame(frame, t, t_arrival_s=t_emit[k] + tof[k] + delta_s, v_mps=V, gain=image_gain)
-    x += awgn_sigma(CFG, snr_db) * rng.standard_normal(t.size)
+    x = multipath_recording(CFG, payloads, t_emit, tof, [(0.0, 1.0), (delta_s, image_gain)], v_mps=V,
+                            snr_db=snr_db, rng=rng)
     rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True),
                   payloads=payloads)
     records = {r.frame_index: r for r in rx.run([x], fs=FS)}

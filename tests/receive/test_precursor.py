@@ -13,9 +13,8 @@ import pytest
 
 from seamodem import get_preset
 from seamodem.receive import Emissions, Receiver, ReceiverSettings
-from seamodem.transmit.frame import build_frame
 
-from analytic import awgn_sigma, received_frame
+from analytic import multipath_recording
 
 CFG = get_preset("jmse2024")
 FS = CFG.sample_rate_hz
@@ -25,15 +24,10 @@ V = 0.8
 
 def _recording(rng, *, direct_gain: float, echo_delay_s: float, snr_db: float, n_frames: int = 4):
     payloads = [f"precursor {k}".encode() for k in range(n_frames)]
-    t = np.arange(int((n_frames + 0.6) * FS)) / FS
-    x = np.zeros(t.size)
     t_emit = 0.1 + np.arange(n_frames) * 1.0
     tof = 0.2 + rng.uniform(0, 0.01, n_frames)
-    for k in range(n_frames):
-        frame = build_frame(CFG, payloads[k])
-        x += received_frame(frame, t, t_arrival_s=t_emit[k] + tof[k], v_mps=V, gain=direct_gain)
-        x += received_frame(frame, t, t_arrival_s=t_emit[k] + tof[k] + echo_delay_s, v_mps=V, gain=1.0)
-    x += awgn_sigma(CFG, snr_db) * rng.standard_normal(t.size)
+    x = multipath_recording(CFG, payloads, t_emit, tof, [(0.0, direct_gain), (echo_delay_s, 1.0)], v_mps=V,
+                            snr_db=snr_db, rng=rng)
     return x, t_emit, tof, payloads
 
 
