@@ -12,6 +12,8 @@ import pytest
 
 from seamodem.cli import main
 
+from array_recording import write_array_recording
+
 ROOT = Path(__file__).resolve().parents[2]
 TIMEOUT = 300
 
@@ -45,16 +47,7 @@ def _close(a: Path, b: Path):
 
 def test_array_from_a_stream_equals_the_file(tmp_path):
     # tests/array/test_array_cli.py's recording, shorter: two frames on a 4-element tetrahedron
-    assert main(["tx", "--preset", "jmse2024", "--count", "2", "--period", "1", "--start", "0.1",
-                 "-o", str(tmp_path / "beacon.wav"), "-q"]) == 0
-    (tmp_path / "s.toml").write_text('mode = "geometry"\nseed = 3\n[environment]\nsound_speed_mps = 1500.0\n'
-                                     'water_depth_m = 35.0\n[beacon]\nposition_m = [0.0, 0.0, -20.0]\n[vehicle]\n'
-                                     'start_m = [-150.0, 60.0, -10.0]\nvelocity_mps = [1.2, 0.2, 0.0]\n'
-                                     '[noise]\nkind = "white"\nsnr_db = 12.0\n')
-    assert main(["channel", str(tmp_path / "beacon.wav"), "--scenario", str(tmp_path / "s.toml"), "--array",
-                 "tetra:0.08", "-o", str(tmp_path / "rx.wav"), "-q"]) == 0
-    assert main(["rx", str(tmp_path / "rx.wav"), "--array", "tetra:0.08", "-o", str(tmp_path / "off.csv"),
-                 "-q"]) == 0
+    write_array_recording(tmp_path, 2)
     p = _run(["-", "--config", tmp_path / "rx.json", "--array", "tetra:0.08", "-o", tmp_path / "live.csv"],
              tmp_path / "rx.wav")
     assert p.returncode == 0, p.stderr.decode()

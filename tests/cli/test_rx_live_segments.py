@@ -22,6 +22,8 @@ import soundfile as sf
 
 from seamodem.cli import main
 
+from array_recording import write_array_recording
+
 ROOT = Path(__file__).resolve().parents[2]
 TIMEOUT = 300
 EMIT = ["--emit-start", "0.3", "--emit-period", "1"]
@@ -38,17 +40,7 @@ def _rx(args) -> list[str]:
 @pytest.fixture(scope="module")
 def array_recording(tmp_path_factory):
     """Ten jmse2024 frames, one a second, on a 4-element tetrahedron (as tests/cli/test_rx_live_receivers.py)."""
-    d = tmp_path_factory.mktemp("array")
-    assert main(["tx", "--preset", "jmse2024", "--count", "10", "--period", "1", "--start", "0.1",
-                 "-o", str(d / "beacon.wav"), "-q"]) == 0
-    (d / "s.toml").write_text('mode = "geometry"\nseed = 3\n[environment]\nsound_speed_mps = 1500.0\n'
-                              'water_depth_m = 35.0\n[beacon]\nposition_m = [0.0, 0.0, -20.0]\n[vehicle]\n'
-                              'start_m = [-150.0, 60.0, -10.0]\nvelocity_mps = [1.2, 0.2, 0.0]\n'
-                              '[noise]\nkind = "white"\nsnr_db = 12.0\n')
-    assert main(["channel", str(d / "beacon.wav"), "--scenario", str(d / "s.toml"), "--array", "tetra:0.08",
-                 "-o", str(d / "rx.wav"), "-q"]) == 0
-    assert main(["rx", str(d / "rx.wav"), "--array", "tetra:0.08", "-o", str(d / "off.csv"), "-q"]) == 0
-    return d
+    return write_array_recording(tmp_path_factory.mktemp("array"), 10)
 
 
 @pytest.fixture(scope="module")
