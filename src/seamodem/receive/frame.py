@@ -17,6 +17,7 @@ impulse blanker and detector options, once for every receiver.
 
 from __future__ import annotations
 
+import cmath
 import collections
 import math
 import warnings
@@ -287,16 +288,61 @@ class _RatePool(_FramePool):
         return math.sqrt(self.standing_mean(0.0))
 
 
+#: frames whose complex channel curvatures are averaged (``_CurvaturePool``): a merged surface image's
+#: geometry changes over minutes at a kilometre, so ten frames see the same bend
+CURVATURE_POOL_FRAMES = 10
+#: the coherent mean's |c̄|² over its noise expectation beyond which it counts: noise alone leaves an
+#: exponential ratio of mean 1, beyond ln(1000) once in 1000 pools
+_COHERENT_THRESHOLD = math.log(1000.0)
+
+
 class _CurvaturePool(_FramePool):
-    """The direct path's channel curvature (``WholeFrameFit.curvature_ms_s4``, unbiased, with its noise σ)
-    over the last ``FADE_POOL_FRAMES`` decoded frames. :attr:`delay_s` is the arrival's bias bound that
-    their mean gives, when that mean stands 3 of its σ out of the noise (0 otherwise): at 1 km, a surface
-    image 17 µs behind, the ends near the surface, bends one frame's channel by 2–3 of its σ at 20 dB
-    (12 mm of bias, σ 0.3 mm), five frames' by 5–7."""
+    """The direct path's channel curvature over the last decoded frames.
+
+    Two means, the larger counted (:attr:`delay_s`, the arrival's bias bound):
+
+    - the fourth powers (``WholeFrameFit.curvature_ms_s4``, unbiased, with their noise σ) over the last
+      ``FADE_POOL_FRAMES``, when their mean stands 3 of its σ out of the noise: a bend whose phase moves
+      from frame to frame (a fading echo) still adds there. At 1 km, a surface image 17 µs behind, the
+      ends near the surface, bends one frame's channel by 2–3 of its σ at 20 dB (12 mm of bias, σ 0.3
+      mm), five frames' by 5–7;
+    - the complex curvature itself (``WholeFrameFit.curvature_s2``, inverse-noise weighted) over the
+      last :data:`CURVATURE_POOL_FRAMES`: an echo that stays put adds coherently, its |c̄|² growing
+      as the frames' count against the noise's, where the fourth powers' mean grows as its root.
+      Counted beyond :data:`_COHERENT_THRESHOLD` times its noise expectation, less that expectation
+      (unbiased). A Lloyd's mirror at −1 dB, a frame's bend at 0.8 of its noise: 10 frames' coherent
+      mean 7.5 times its noise, the fourth powers' mean 2.4 of its σ.
+    """
+
+    def __init__(self):
+        super().__init__()
+        self._bends: collections.deque[tuple[complex, float]] = collections.deque(maxlen=CURVATURE_POOL_FRAMES)
+
+    def add_fit(self, wf: WholeFrameFit, first: int) -> None:
+        """Pool the fit's direct-path curvature (``wf.curvature_*``; nothing when it has none)."""
+        if wf.curvature_ms_s4 is None:
+            return
+        noise = float(wf.curvature_noise_s4[first])
+        self.add(float(wf.curvature_ms_s4[first]), noise)
+        bend = complex(wf.curvature_s2[first]) if wf.curvature_s2 is not None else complex("nan")
+        if cmath.isfinite(bend) and math.isfinite(noise) and noise > 0:
+            self._bends.append((bend, noise))
+
+    def coherent_s4(self) -> float:
+        """|c̄|² less its noise expectation [s⁴] when beyond the threshold, else 0 (0 with none)."""
+        if not self._bends:
+            return 0.0
+        bends, noise = (np.array(v) for v in zip(*self._bends))
+        weight = 1.0 / noise.real
+        mean = complex(np.sum(weight * bends) / np.sum(weight))
+        floor = 1.0 / float(np.sum(weight))  # E|c̄|² of noise alone
+        power = abs(mean) ** 2
+        return power - floor if power > _COHERENT_THRESHOLD * floor else 0.0
 
     @property
     def delay_s(self) -> float:
-        return self.standing_mean(3.0) ** 0.25 / math.sqrt(3)  # σ of a uniform spread over the bound
+        bound4 = max(self.standing_mean(3.0), self.coherent_s4())
+        return bound4**0.25 / math.sqrt(3)  # σ of a uniform spread over the bound
 
 
 #: frames further apart than this [s] are not compared for the slow fading (``FrameMeasurer._frame_to_frame``)
@@ -764,6 +810,12 @@ class FrameMeasurer:
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
         fit = self._whole_frame(m, dec, bb, t0_s, fs) if dec is not None and self.settings.whole_frame_doppler else None
+        if fit is not None and fit[2] == "whole_frame":
+            # the channel's bend, from decoded frames only: decided symbols at low SNR rectify the noise,
+            # each sub-band's in proportion to its noise share, which the equal-energy sub-bands' outer ones
+            # have more of (a single path at −2 dB: ln|H| bent by 2 of its σ on every frame)
+            self._curvature_pool.add_fit(fit[0], fit[1])
+        pooled_merge = self._curvature_pool.delay_s
         inflation = 1.0
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
         if fit is not None and fit[2] == "whole_frame_decisions":
@@ -792,7 +844,8 @@ class FrameMeasurer:
                 fit, rejected = None, (v, grown, fit)
         sigma_tau_rejected = 0.0
         if rejected is not None:
-            sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c)[1]
+            sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c,
+                                                   pooled_merge_delay_s=pooled_merge)[1]
             # two independent estimates of the same speed further apart than 3 combined σ: one of them is
             # wrong and the frame does not say which, so the one used (the tone) has a σ that covers the gap
             gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
@@ -806,10 +859,7 @@ class FrameMeasurer:
             if source == "whole_frame":
                 if wf.amp_rate_ms is not None:
                     self._fade_pool.add(float(wf.amp_rate_ms[first]))
-                if wf.curvature_ms_s4 is not None:
-                    self._curvature_pool.add(float(wf.curvature_ms_s4[first]), float(wf.curvature_noise_s4[first]))
                 self._frame_to_frame(wf, first, range_m)
-            pooled_merge = self._curvature_pool.delay_s
             sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
                                               pooled_amp_rate_hz=max(self._fade_pool.rate_hz,
                                                                      self._slow_fade_pool.rate_hz),
@@ -833,12 +883,15 @@ class FrameMeasurer:
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first])), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape)
+        # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
+        sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank, v_r_source="bank",
-                        v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s)), None
+                        v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s),
+                        sigma_tau_unmodelled=sigma_tau_unmodelled), None
         return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank, v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
-                    n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_rejected), None
+                    n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_unmodelled), None
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
         """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""

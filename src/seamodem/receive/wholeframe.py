@@ -104,6 +104,13 @@ class WholeFrameFit:
     curvature_noise_s4 : numpy.ndarray
         That noise expectation [s⁴], also the σ of ``curvature_ms_s4`` on a
         channel without curvature.
+    curvature_s2 : numpy.ndarray
+        The curvature itself, complex (ln|H|'s and the phase's) [s²], scaled
+        so that ``abs(curvature_s2)**2 - curvature_noise_s4`` is
+        ``curvature_ms_s4``: its noise is circular, ``curvature_noise_s4 / 2``
+        per component. It is invariant to the path's gain and delay, so a
+        channel whose echo stays put adds coherently over frames, where the
+        fourth powers add only in their mean (``FrameMeasurer``).
     delay_scatter_s : numpy.ndarray
         Deviation of the segments' data-aided timings about their mean, less
         what the timing CRLB gives it [s] (a diagnostic: the segments' timing
@@ -125,6 +132,7 @@ class WholeFrameFit:
     tilt_delay_s: np.ndarray | None = None
     curvature_ms_s4: np.ndarray | None = None
     curvature_noise_s4: np.ndarray | None = None
+    curvature_s2: np.ndarray | None = None
     delay_scatter_s: np.ndarray | None = None
 
 
@@ -527,6 +535,7 @@ def fit_whole_frame(
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
     curv_ms, curv_noise = np.zeros(n_paths), np.zeros(n_paths)
+    curv = np.zeros(n_paths, complex)
     for p in range(n_paths):
         zs, ts = last_phase[p]
         # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²); each term of the
@@ -576,6 +585,7 @@ def fit_whole_frame(
     scale4 = 4 / (span2**2 * (2 * np.pi) ** 4)
     curv_ms[p] = scale4 * (a[2] ** 2 + b[2] ** 2 - 2 * cov[2, 2])
     curv_noise[p] = scale4 * 2 * cov[2, 2]
+    curv[p] = math.sqrt(scale4) * complex(a[2], b[2])
     c2 = a[2] ** 2 + b[2] ** 2 - 9 * 2 * cov[2, 2]  # |c|² beyond 3 of its noise σ, as the amplitude rate
     # the bias lies within ± the bound, its sign and size set by the echo's phase: its σ is that of a uniform
     # spread over it, bound/√3. A bend beyond |c| ≈ 1/2 is more than a weaker echo gives (several, or one
@@ -599,4 +609,5 @@ def fit_whole_frame(
         tilt_delay_s=tilt[order],
         curvature_ms_s4=curv_ms[order],
         curvature_noise_s4=curv_noise[order],
+        curvature_s2=curv[order],
     )
