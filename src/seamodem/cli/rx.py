@@ -82,6 +82,9 @@ def add_parser(sub) -> None:
     p.add_argument("--array", metavar="SPEC", help="all channels as a hydrophone array (as seamodem channel --array): "
                    "direction of arrival per frame, combined decoding (docs/array.md)")
     p.add_argument("--v-max", type=float, default=5.0, metavar="M/S", help="largest |v_r| searched (default 5 m/s)")
+    p.add_argument("--lookahead", type=int, metavar="FRAMES",
+                   help="frames measured after a record before it is written (default 5; live: 0): its range σ then "
+                        "also covers a merged echo's bend that those frames show, and its gap to their track")
     p.add_argument(
         "--false-alarms-per-hour",
         type=float,
@@ -253,6 +256,7 @@ def _settings(args, sidecar: dict | None, profile=None):
         # the depths give the arrival's σ its merged-surface-image term (with or without a profile)
         beacon_depth_m=args.beacon_depth,
         vehicle_depth_m=args.vehicle_depth,
+        **({} if getattr(args, "lookahead", None) is None else {"lookahead_frames": args.lookahead}),
     ), origin
 
 

@@ -70,7 +70,9 @@ def live_requested(args: argparse.Namespace) -> bool:
 
 
 def live_settings(settings, args: argparse.Namespace):
-    """The receiver's settings for a live run: the front end's short blocks (``--front-end-block``).
+    """The receiver's settings for a live run: the front end's short blocks (``--front-end-block``), and
+    each record given out as soon as it is measured (``lookahead_frames=0`` unless ``--lookahead`` says
+    otherwise: an autopilot wants it now; its range σ then has only the earlier frames' channel bend).
 
     Parameters
     ----------
@@ -87,7 +89,8 @@ def live_settings(settings, args: argparse.Namespace):
 
     block = LIVE_FRONT_END_BLOCK if args.front_end_block is None else args.front_end_block
     try:
-        return dataclasses.replace(settings, front_end_block=block)
+        lookahead = 0 if getattr(args, "lookahead", None) is None else args.lookahead
+        return dataclasses.replace(settings, front_end_block=block, lookahead_frames=lookahead)
     except ConfigError as exc:
         raise SeamodemError(f"front-end-block:{str(exc).partition(':')[2]}") from None
 

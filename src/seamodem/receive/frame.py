@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import cmath
 import collections
+import dataclasses
 import math
 import warnings
 from collections.abc import Callable
@@ -45,6 +46,7 @@ __all__ = [
     "BasebandBuffers",
     "FrameMeasurer",
     "ReceiverWarning",
+    "ShapeLookahead",
     "detector_options",
     "direct_path_share",
     "one_blas_thread",
@@ -618,6 +620,9 @@ class FrameMeasurer:
         # frame, whose rate within one frame is within its noise
         self._slow_fade_pool = _RatePool()
         self._last_amplitude: tuple[float, float, float] | None = None
+        #: of the last record: the channel shape's σ its arrival took [s], and metres per second of arrival σ
+        #: in its range σ (c, or c/2 two-way); :class:`ShapeLookahead` raises it when later frames bend more
+        self.last_shape: tuple[float, float] = (0.0, 0.0)
 
     def _frame_to_frame(self, wf: WholeFrameFit, first: int, range_m: float) -> None:
         """Pool the direct path's log-amplitude rate from the last decoded frame to this one.
@@ -714,7 +719,9 @@ class FrameMeasurer:
         sigma_bank = doppler.pop("sigma_bank")
         # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
         # sees the same channel
-        sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_unmodelled", 0.0))
+        unmodelled = doppler.pop("sigma_tau_unmodelled", 0.0)
+        sigma_tau = math.hypot(sigma_tau, unmodelled)
+        shape_used = unmodelled  # without a fit: the pooled bend, or a set-aside fit's terms (the larger)
         sigma_first = earlier_path_gap_s(m)
         # the direct path's data-aided arrival over the frame; on decisions, only when its σ is the smaller
         # (a fit on decisions mostly wrong: 23 mm off, σ 29 mm, where the pilot's arrival was 1 mm off)
@@ -732,6 +739,7 @@ class FrameMeasurer:
             if doppler["v_r_source"] == "whole_frame" or sigma_fit < sigma_tau:
                 t_arr, sigma_tau = t_fit, sigma_fit
             sigma_tau = math.sqrt(sigma_tau**2 + sigma_shape**2 + max(0.0, excess))
+            shape_used = sigma_shape
         sigma_tau = math.hypot(sigma_tau, sigma_first)
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
@@ -741,6 +749,7 @@ class FrameMeasurer:
         else:
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
+        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c)
         return MeasurementRecord(
             frame_index=int(k),
             t_emit_s=float(t_emit),
@@ -922,3 +931,128 @@ class FrameMeasurer:
             return None
         first = int(np.argmin(np.abs(wf.delays_s - paths.first_s)))
         return wf, first, source
+
+
+#: the radial jerk the track check allows [m/s³] (``ShapeLookahead``): circling at 8 m radius and
+#: 1.6 m/s, the closing speed's second derivative is about v·ω² ≈ 0.06; a straight leg's far less
+TRACK_JERK_MPS3 = 0.2
+#: neighbours further apart than this [s] are not compared by the track check
+_TRACK_MAX_GAP_S = 10.0
+
+
+class ShapeLookahead:
+    """Records held back until later frames have been measured (``ReceiverSettings.lookahead_frames``).
+
+    Two things a frame cannot show about itself, its neighbours can:
+
+    - **the channel's bend.** The channel shape's σ of an arrival (a merged echo's bias bound,
+      ``channel_shape_delay_s``) comes from the curvature pooled over *recent* decoded frames, so the first
+      frames of a recording, and frames while the pool's mean hovers at its threshold, miss it: the corpus's
+      far family, 1 km with the surface image merged, had its first two or five frames 8–26σ off where the
+      next ones were covered. A held record takes the larger of its own shape term and the pool's when it
+      is released (the pool then spans it: 5 decoded frames after it, 10 around it for the coherent mean);
+    - **the track.** A range that the neighbouring frames' ranges and closing speeds do not reach
+      (r_k = r_j − (v_j + v_k)/2 · (t_k − t_j), exact for a constant acceleration, within
+      :data:`TRACK_JERK_MPS3`·|dt|³/12 otherwise) is an echo taken for a faded direct path, or an arrival
+      given to the wrong emission: when *every* neighbour (at least two, up to two on each side within
+      10 s) puts it beyond 3 combined σ on the same side, its σ covers the smallest gap beyond those 3σ
+      (as two estimates of one quantity elsewhere in the receiver). A neighbour that is itself an outlier
+      has a σ that makes it agree, so one bad frame does not condemn the next.
+
+    Only ``sigma_range_m`` can grow. ``frames=0`` releases each record at once (a live receiver), with
+    neither check.
+
+    Parameters
+    ----------
+    measurer : FrameMeasurer
+        The stream's measurer (its curvature pool and each record's :attr:`FrameMeasurer.last_shape`).
+    frames : int
+        Frames measured after a record before it is released.
+    """
+
+    def __init__(self, measurer: FrameMeasurer, frames: int):
+        self.measurer = measurer
+        self.frames = int(frames)
+        self._held: collections.deque = collections.deque()
+        self._released: collections.deque = collections.deque(maxlen=2)
+
+    def push(self, record: MeasurementRecord) -> list[MeasurementRecord]:
+        """Hold ``record`` (just measured) and return those now released, in order."""
+        if self.frames <= 0:
+            return [record]
+        self._held.append((record, self.measurer.last_shape))
+        out = []
+        while len(self._held) > self.frames:
+            out.append(self._settle(*self._held.popleft()))
+        return out
+
+    def flush(self) -> list[MeasurementRecord]:
+        """Every record still held (the stream has ended), in order."""
+        out = []
+        while self._held:
+            out.append(self._settle(*self._held.popleft()))
+        return out
+
+    def _settle(self, record: MeasurementRecord, shape: tuple[float, float]) -> MeasurementRecord:
+        used_s, metres_per_s = shape
+        later_s = _K_MERGE * self.measurer._curvature_pool.delay_s
+        var = record.sigma_range_m**2 + metres_per_s**2 * max(0.0, later_s**2 - used_s**2)
+        var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
+                            sigma_range_m=math.sqrt(var))
+        if var > record.sigma_range_m**2:
+            record = dataclasses.replace(record, sigma_range_m=math.sqrt(var))
+        self._released.append(record)
+        return record
+
+
+def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord], *,
+                 sigma_range_m: float) -> float:
+    """The variance [m²] a record's range σ needs to reach its neighbours' track (``ShapeLookahead``).
+
+    Parameters
+    ----------
+    record : MeasurementRecord
+        The record checked (its ``sigma_range_m`` replaced by ``sigma_range_m``).
+    neighbours : list of MeasurementRecord
+        Records of the same stream before and after it.
+    sigma_range_m : float
+        The record's range σ so far [m].
+
+    Returns
+    -------
+    float
+        0 unless every neighbour within 10 s (at least two) puts the range beyond 3 combined σ on the same
+        side; then the smallest of their gaps² less 9 combined variances.
+
+    Examples
+    --------
+    >>> from seamodem.receive.records import MeasurementRecord
+    >>> def rec(t, r):
+    ...     return MeasurementRecord(frame_index=0, t_emit_s=t, t_arrival_s=t, tof_s=r / 1500, range_m=r,
+    ...         v_r_mps=1.0, snr_db=10, v_r_tone_eq9_mps=1.0, v_r_bank_mps=1.0, detection_z=9,
+    ...         detection_rho=0.5, sigma_range_m=0.002, sigma_v_r_mps=0.002, sigma_v_r_bank_mps=0.01,
+    ...         tone_c_n0_dbhz=60)
+    >>> track = [rec(0.0, 100.0), rec(1.0, 99.0), rec(3.0, 97.0), rec(4.0, 96.0)]
+    >>> track_gap_m2(rec(2.0, 98.0), track, sigma_range_m=0.002)
+    0.0
+    >>> round(track_gap_m2(rec(2.0, 99.0), track, sigma_range_m=0.002) ** 0.5, 2)  # an echo 1 m behind
+    0.92
+    """
+    r, v, t = record.range_m, record.v_r_mps, record.t_arrival_s
+    sigma_v = record.sigma_v_r_mps
+    gaps = []
+    for n in neighbours:
+        dt = t - n.t_arrival_s
+        if not (0 < abs(dt) <= _TRACK_MAX_GAP_S):
+            continue
+        d = r - (n.range_m - (n.v_r_mps + v) / 2 * dt)
+        s2 = (sigma_range_m**2 + n.sigma_range_m**2 + (sigma_v**2 + n.sigma_v_r_mps**2) / 4 * dt**2
+              + (TRACK_JERK_MPS3 * abs(dt) ** 3 / 12) ** 2)
+        if not (math.isfinite(d) and math.isfinite(s2)):
+            continue
+        gaps.append((d, s2))
+    if len(gaps) < 2 or not all(d * d > 9 * s2 for d, s2 in gaps):
+        return 0.0
+    if not (all(d > 0 for d, _ in gaps) or all(d < 0 for d, _ in gaps)):
+        return 0.0
+    return min(d * d - 9 * s2 for d, s2 in gaps)

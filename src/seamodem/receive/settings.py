@@ -84,6 +84,12 @@ class ReceiverSettings:
         no signature one frame shows, and the arrival's σ takes the delay
         (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without them
         the σ cannot cover that bias (docs/receiver.md).
+    lookahead_frames : int
+        Frames measured after a record before it is given out: its range σ
+        then also covers the channel bend that those later frames show
+        (:class:`~seamodem.receive.frame.ShapeLookahead`; the first frames of
+        a recording have no earlier ones). 0 gives each record out as soon as
+        it is measured (a live receiver: ``rx --live`` uses 0).
 
     Examples
     --------
@@ -110,6 +116,7 @@ class ReceiverSettings:
     front_end_block: int | None = None
     beacon_depth_m: float | None = None
     vehicle_depth_m: float | None = None
+    lookahead_frames: int = 5
 
     def __post_init__(self):
         _positive("sound_speed", self.sound_speed_mps)
@@ -132,6 +139,9 @@ class ReceiverSettings:
             if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or not math.isfinite(z)
                                   or z < 0):
                 raise ConfigError(name.removesuffix("_m"), f"must be a depth >= 0 m, got {z!r}")
+        n = self.lookahead_frames
+        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+            raise ConfigError("lookahead_frames", f"must be an integer >= 0, got {n!r}")
         for name in ("decode", "follow_track", "blank_impulses", "whole_frame_doppler"):
             if not isinstance(getattr(self, name), bool):
                 raise ConfigError(name, f"must be true or false, got {getattr(self, name)!r}")

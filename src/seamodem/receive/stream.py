@@ -24,6 +24,7 @@ from .frame import (  # noqa: F401  (direct_path_share, tone_fallback_sigma_mps:
     BasebandBuffers,
     FrameMeasurer,
     ReceiverWarning,
+    ShapeLookahead,
     detector_options,
     direct_path_share,
     receiver_front_end,
@@ -121,6 +122,7 @@ class Receiver:
         measurer = FrameMeasurer(cfg, plan, emissions=self.emissions, settings=s, pilot=self.pilot,
                                  payloads=self.payloads, blanker=blanker, on_frame=self.on_frame)
         self.plan, self.blanker, self.detector, self.measurer = plan, blanker, det, measurer
+        self._lookahead = ShapeLookahead(measurer, s.lookahead_frames)
         state = BasebandBuffers()
         scan_from = 0
         pending: list[Detection] = []
@@ -142,6 +144,7 @@ class Receiver:
         found, scan_from = det.find(state.bb, state.bb_start, scan_from, final=True)
         pending.extend(found)
         yield from self._measure_ready(pending, state, final=True)
+        yield from self._lookahead.flush()
 
     def _measure_ready(self, pending: list[Detection], state: BasebandBuffers, *, final: bool
                        ) -> Iterator[MeasurementRecord]:
@@ -154,4 +157,4 @@ class Receiver:
         ready = [d for d in pending if final or d.t_start_s + span_s <= t_end]
         pending[:] = [d for d in pending if not (final or d.t_start_s + span_s <= t_end)]
         for d in ready:
-            yield self.measurer.measure(d, state)
+            yield from self._lookahead.push(self.measurer.measure(d, state))

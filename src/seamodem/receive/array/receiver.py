@@ -17,7 +17,8 @@ import numpy as np
 from ...config import FrameConfig
 from ...errors import ConfigError, InputFileError
 from ...transmit.pilot import pilot_symbols
-from ..frame import BasebandBuffers, FrameMeasurer, ReceiverWarning, detector_options, one_blas_thread
+from ..frame import (BasebandBuffers, FrameMeasurer, ReceiverWarning, ShapeLookahead, detector_options,
+                     one_blas_thread)
 from ..measure import NOISE_WINDOW_S
 from ..records import MeasurementRecord
 from ..settings import Emissions, ReceiverSettings
@@ -126,6 +127,7 @@ def receive_array(
         measurer = FrameMeasurer(config, plan, emissions=emissions, settings=s, pilot=pilot, payloads=payloads,
                                  blanker=blanker)
         span = measurer.span_s
+        lookahead = ShapeLookahead(measurer, s.lookahead_frames)
         y_bb, y_tone = bb[:, reference_channel].copy(), tone[:, reference_channel].copy()
         f_data, f_tone = plan.data.centre_hz, plan.tone.centre_hz
         records: list[MeasurementRecord] = []
@@ -153,15 +155,14 @@ def receive_array(
                                      y_tone[i_tone: max(i_tone, math.ceil(t_hi * plan.fs_tone))],
                                      bb_start=i_bb, tone_start=i_tone)
             rec = measurer.measure(d, window)
-            if doa is None:
-                records.append(rec)
-                out_doas.append(None)
-                continue
-            records.append(dataclasses.replace(
-                rec, azimuth_body_rad=doa.azimuth_rad, elevation_body_rad=doa.elevation_rad,
-                sigma_azimuth_body_rad=doa.sigma_azimuth_rad, sigma_elevation_body_rad=doa.sigma_elevation_rad,
-                n_channels=int(x.shape[1])))
             out_doas.append(doa)
+            if doa is not None:
+                rec = dataclasses.replace(
+                    rec, azimuth_body_rad=doa.azimuth_rad, elevation_body_rad=doa.elevation_rad,
+                    sigma_azimuth_body_rad=doa.sigma_azimuth_rad, sigma_elevation_body_rad=doa.sigma_elevation_rad,
+                    n_channels=int(x.shape[1]))
+            records.extend(lookahead.push(rec))
+        records.extend(lookahead.flush())
     return records, out_doas
 
 
