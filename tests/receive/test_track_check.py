@@ -63,3 +63,50 @@ def test_an_echo_taken_for_the_direct_path_is_covered_by_the_track(lookahead):
         assert records[LOST].sigma_range_m <= 2 * abs(err), records[LOST].sigma_range_m  # its scale, not more
     else:
         assert abs(z[LOST]) > 30, z  # live: nothing to compare with yet
+
+
+def _record(t, r, v, sigma_r=0.001, sigma_v=0.001):
+    from seamodem.receive.records import MeasurementRecord
+
+    return MeasurementRecord(frame_index=0, t_emit_s=t, t_arrival_s=t, tof_s=r / C, range_m=r, v_r_mps=v,
+                             snr_db=15.0, v_r_tone_eq9_mps=v, v_r_bank_mps=v, detection_z=9.0, detection_rho=0.5,
+                             sigma_range_m=sigma_r, sigma_v_r_mps=sigma_v, sigma_v_r_bank_mps=0.01,
+                             tone_c_n0_dbhz=60.0)
+
+
+def test_the_track_is_exact_for_a_constant_acceleration(monkeypatch):
+    from seamodem.receive import frame
+    from seamodem.receive.frame import track_gap_m2
+
+    # r(t) = r0 − v0 t − a t²/2; a record's v_r is the mean over its frame, [t, t + D]: v0 + a(t + D/2)
+    r0, v0, a, dur = 40.0, 0.4, 0.3, 0.3  # a: circling at 8 m, 1.6 m/s
+    times = np.arange(5) * 1.0
+
+    def rec(t, extra=0.0):
+        return _record(t, r0 - v0 * t - a * t**2 / 2 + extra, v0 + a * (t + dur / 2))
+
+    track = [rec(t) for t in np.delete(times, 2)]
+    # no jerk allowed: the prediction itself must be exact (σ's of 1 mm)
+    monkeypatch.setattr(frame, "TRACK_JERK_MPS3", 0.0)
+    assert track_gap_m2(rec(2.0), track, sigma_range_m=0.001, half_frame_s=dur / 2) == 0.0
+    # without bringing the speeds back to the arrivals, the same track is a·(D/2)·dt off (4.5 cm per second),
+    # on opposite sides before and after: the last frame of a recording, its neighbours all before it, is
+    before = track[:2]
+    assert track_gap_m2(rec(2.0), before, sigma_range_m=0.001, half_frame_s=dur / 2) == 0.0
+    assert track_gap_m2(rec(2.0), before, sigma_range_m=0.001, half_frame_s=0.0) > 0.03**2
+    monkeypatch.undo()
+    # with the jerk's allowance, a 50 cm error is found; the σ added is its gap less the farther
+    # neighbours' 3σ (the jerk's over 2 s, 13 cm)
+    d = track_gap_m2(rec(2.0, extra=0.5), track, sigma_range_m=0.001, half_frame_s=dur / 2) ** 0.5
+    assert 0.25 < d < 0.5, d
+
+
+def test_a_neighbour_that_is_itself_off_does_not_condemn_a_good_frame():
+    from seamodem.receive.frame import track_gap_m2
+
+    track = [_record(0.0, 100.0, 1.0), _record(1.0, 99.0 + 1.5, 1.0, sigma_r=1.5), _record(3.0, 97.0, 1.0),
+             _record(4.0, 96.0, 1.0)]
+    assert track_gap_m2(_record(2.0, 98.0, 1.0), track, sigma_range_m=0.001) == 0.0
+    # nor do neighbours on both sides that disagree in opposite directions
+    split = [_record(1.0, 99.5, 1.0), _record(3.0, 96.5, 1.0)]
+    assert track_gap_m2(_record(2.0, 98.0, 1.0), split, sigma_range_m=0.001) == 0.0

@@ -952,8 +952,8 @@ class ShapeLookahead:
       next ones were covered. A held record takes the larger of its own shape term and the pool's when it
       is released (the pool then spans it: 5 decoded frames after it, 10 around it for the coherent mean);
     - **the track.** A range that the neighbouring frames' ranges and closing speeds do not reach
-      (r_k = r_j − (v_j + v_k)/2 · (t_k − t_j), exact for a constant acceleration, within
-      :data:`TRACK_JERK_MPS3`·|dt|³/12 otherwise) is an echo taken for a faded direct path, or an arrival
+      (r_k = r_j − (v_j + v_k)/2 · (t_k − t_j) + (v_k − v_j)·D/2, exact for a constant acceleration, within
+      :data:`TRACK_JERK_MPS3`·|dt|³/12 otherwise; D/2 brings the frames' mean speeds to their arrivals) is an echo taken for a faded direct path, or an arrival
       given to the wrong emission: when *every* neighbour (at least two, up to two on each side within
       10 s) puts it beyond 3 combined σ on the same side, its σ covers the smallest gap beyond those 3σ
       (as two estimates of one quantity elsewhere in the receiver). A neighbour that is itself an outlier
@@ -998,7 +998,7 @@ class ShapeLookahead:
         later_s = _K_MERGE * self.measurer._curvature_pool.delay_s
         var = record.sigma_range_m**2 + metres_per_s**2 * max(0.0, later_s**2 - used_s**2)
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
-                            sigma_range_m=math.sqrt(var))
+                            sigma_range_m=math.sqrt(var), half_frame_s=self.measurer.config.frame_duration_s / 2)
         if var > record.sigma_range_m**2:
             record = dataclasses.replace(record, sigma_range_m=math.sqrt(var))
         self._released.append(record)
@@ -1006,7 +1006,7 @@ class ShapeLookahead:
 
 
 def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord], *,
-                 sigma_range_m: float) -> float:
+                 sigma_range_m: float, half_frame_s: float = 0.0) -> float:
     """The variance [m²] a record's range σ needs to reach its neighbours' track (``ShapeLookahead``).
 
     Parameters
@@ -1017,6 +1017,11 @@ def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord],
         Records of the same stream before and after it.
     sigma_range_m : float
         The record's range σ so far [m].
+    half_frame_s : float
+        Half the frame's duration [s]: a record's v_r is its mean over the frame's reception, the speed
+        half a frame after the arrival its range is timed at, so the speeds are brought back to the
+        arrivals with the acceleration between them ((v_k − v_j)/dt: (v_k − v_j)·δ of range; circling at
+        8 m, 0.3 m/s per second and 0.15 s: 4.5 cm).
 
     Returns
     -------
@@ -1045,7 +1050,7 @@ def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord],
         dt = t - n.t_arrival_s
         if not (0 < abs(dt) <= _TRACK_MAX_GAP_S):
             continue
-        d = r - (n.range_m - (n.v_r_mps + v) / 2 * dt)
+        d = r - (n.range_m - (n.v_r_mps + v) / 2 * dt + (v - n.v_r_mps) * half_frame_s)
         s2 = (sigma_range_m**2 + n.sigma_range_m**2 + (sigma_v**2 + n.sigma_v_r_mps**2) / 4 * dt**2
               + (TRACK_JERK_MPS3 * abs(dt) ** 3 / 12) ** 2)
         if not (math.isfinite(d) and math.isfinite(s2)):
