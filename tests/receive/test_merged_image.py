@@ -137,9 +137,10 @@ def test_a_steady_bend_below_one_frames_noise_adds_up_coherently():
             pool.add_fit(_fit(_noisy_bend(rng, bend, noise), noise), 0)
         counted_coherent += pool.coherent_s4() > 0
         counted_powers += pool.standing_mean(3.0) > 0
-    # 10 frames: |c̄|² 8 times its noise against a threshold of 6.9; the powers' mean 2.6 of its σ against 3
-    assert counted_coherent >= 120, counted_coherent
-    assert counted_powers <= 80, counted_powers
+    # 10 frames: |c̄|² about 9 times its noise against a threshold of 6.9 (counted in 67 % of 2000 pools);
+    # the powers' mean 2.5 of its σ against 3 (22 %)
+    assert counted_coherent >= 110, counted_coherent
+    assert counted_powers <= 70, counted_powers
     # counted, the bound is the bend's: (|c|²)^(1/4)/√3 within a factor 1.5 on a typical pool
     pool = _CurvaturePool()
     for _ in range(CURVATURE_POOL_FRAMES):
