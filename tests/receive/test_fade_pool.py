@@ -71,8 +71,10 @@ def _z(monkeypatch, pool: int, recordings) -> np.ndarray:
     monkeypatch.setattr(frame_module, "FADE_POOL_FRAMES", pool)
     z = []
     for x, t_emit, tof, payloads in recordings:
-        rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True),
-                      payloads=payloads)
+        # (records given out at once: the look-ahead would give a held frame the pool of the frames after it,
+        # and the per-frame term would no longer be alone with a pool of 1)
+        rx = Receiver(CFG, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True,
+                      lookahead_frames=0), payloads=payloads)
         for r in rx.run([x], fs=FS):
             if r.v_r_source == "whole_frame":
                 z.append((r.v_r_mps - V) / r.sigma_v_r_mps)

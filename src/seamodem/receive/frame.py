@@ -52,6 +52,7 @@ __all__ = [
     "one_blas_thread",
     "receiver_front_end",
     "tone_fallback_sigma_mps",
+    "bank_echo_sigma_mps",
     "earlier_path_gap_s",
     "merged_image_delay_s",
     "two_carrier_sigma_mps",
@@ -414,6 +415,29 @@ def channel_shape_delay_s(wf: WholeFrameFit, first: int, pooled_merge_delay_s: f
     return _K_MERGE * max(tilt, pooled_merge_delay_s)
 
 
+def bank_echo_sigma_mps(wf: WholeFrameFit, first: int, config: FrameConfig) -> float:
+    """σ [m/s] the pilot bank's Doppler takes from the echoes that overlap the pilot, as the whole-frame fit
+    sees them.
+
+    The bank's Doppler comes from the pilot alone (23 ms at jmse2024: a Doppler resolution of 2.3 m/s),
+    and an echo that arrives while the pilot is still being received, with its own Doppler, pulls it
+    towards its own: up to b·|v_echo − v_direct| for an echo of relative amplitude b (the corpus's steep
+    family, an echo 0.6 of the direct path 3.5 ms behind, 0.2–0.46 m/s away: the bank 0.05–1.0 of that
+    off, 4–6 of its CRLB). Each such path of the fit adds (b·Δv)²; the σ is that of a uniform spread
+    over the sum's root, /√3. 0 with no such path.
+    """
+    span = config.n_pilot * config.symbol_period_s
+    a0 = abs(complex(wf.amplitudes[first]))
+    if not a0 > 0:
+        return 0.0
+    total = 0.0
+    for p in range(len(wf.delays_s)):
+        lag = float(wf.delays_s[p] - wf.delays_s[first])
+        if p != first and 0 < lag < span:
+            total += (abs(complex(wf.amplitudes[p])) / a0 * abs(float(wf.v_mps[p] - wf.v_mps[first]))) ** 2
+    return math.sqrt(total / 3) if math.isfinite(total) else 0.0
+
+
 def time_scale_delay_s(sigma_v_mps: float, config: FrameConfig, *, sound_speed_mps: float) -> float:
     """The frame-start arrival's σ [s] from a σ of the Doppler that sets the symbol instants' time scale.
 
@@ -623,9 +647,17 @@ class FrameMeasurer:
         # frame, whose rate within one frame is within its noise
         self._slow_fade_pool = _RatePool()
         self._last_amplitude: tuple[float, float, float] | None = None
-        #: of the last record: the channel shape's σ its arrival took [s], and metres per second of arrival σ
-        #: in its range σ (c, or c/2 two-way); :class:`ShapeLookahead` raises it when later frames bend more
-        self.last_shape: tuple[float, float] = (0.0, 0.0)
+        #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
+        #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate and the rate its v_r
+        #: took [Hz] (None: v_r not from a fit); :class:`ShapeLookahead` settles them with later frames
+        self.last_shape: tuple[float, float, tuple[float, float] | None] = (0.0, 0.0, None)
+        self._fade_used_hz: tuple[float, float] | None = None
+
+    @property
+    def pooled_fade_rate_hz(self) -> float:
+        """The direct path's log-amplitude rate pooled over recent decoded frames, within them and from frame
+        to frame (the larger) [Hz]."""
+        return max(self._fade_pool.rate_hz, self._slow_fade_pool.rate_hz)
 
     def _frame_to_frame(self, wf: WholeFrameFit, first: int, range_m: float) -> None:
         """Pool the direct path's log-amplitude rate from the last decoded frame to this one.
@@ -752,7 +784,7 @@ class FrameMeasurer:
         else:
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
-        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c)
+        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c, self._fade_used_hz)
         return MeasurementRecord(
             frame_index=int(k),
             t_emit_s=float(t_emit),
@@ -801,6 +833,7 @@ class FrameMeasurer:
         arrival the range.
         """
         c = self.settings.sound_speed_mps
+        self._fade_used_hz = None
         v_tone = m.v_tone_ml_mps
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
@@ -872,12 +905,16 @@ class FrameMeasurer:
                 if wf.amp_rate_ms is not None:
                     self._fade_pool.add(float(wf.amp_rate_ms[first]))
                 self._frame_to_frame(wf, first, range_m)
+            pooled_rate = self.pooled_fade_rate_hz
             sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
-                                              pooled_amp_rate_hz=max(self._fade_pool.rate_hz,
-                                                                     self._slow_fade_pool.rate_hz),
-                                              pooled_merge_delay_s=pooled_merge)
+                                              pooled_amp_rate_hz=pooled_rate, pooled_merge_delay_s=pooled_merge)
+            own_rate = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
+            self._fade_used_hz = (own_rate, max(own_rate, pooled_rate))
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
+            # (the bank's σ with the pull of the echoes the fit sees over the pilot: without it, the steep
+            # family's decoded rows took 40–110 mm/s of σ from a bank 0.1 m/s off, their error 0.1–0.9 mm/s)
+            sigma_bank = math.hypot(sigma_bank, bank_echo_sigma_mps(wf, first, self.config))
             sigma = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * (sigma**2 + sigma_bank**2)))
             # (a fit on decisions has the tone as its referee already, above)
             sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone_noise, sigma, self.config,
@@ -946,7 +983,7 @@ _TRACK_MAX_GAP_S = 10.0
 class ShapeLookahead:
     """Records held back until later frames have been measured (``ReceiverSettings.lookahead_frames``).
 
-    Two things a frame cannot show about itself, its neighbours can:
+    What a frame cannot show about itself, its neighbours can:
 
     - **the channel's bend.** The channel shape's σ of an arrival (a merged echo's bias bound,
       ``channel_shape_delay_s``) comes from the curvature pooled over *recent* decoded frames, so the first
@@ -962,8 +999,12 @@ class ShapeLookahead:
       (as two estimates of one quantity elsewhere in the receiver). A neighbour that is itself an outlier
       has a σ that makes it agree, so one bad frame does not condemn the next.
 
-    Only ``sigma_range_m`` can grow. ``frames=0`` releases each record at once (a live receiver), with
-    neither check.
+    A whole-frame v_r's fading-rate term (``unmodelled_sigmas``, pooled over recent decoded frames) is
+    settled the same way, but replaced rather than raised: the pool when the record is released spans it,
+    before and after, where the one it took had only earlier frames (and the larger of two noisy pools
+    would inflate it); the frame's own rate stays its floor. Only ``sigma_range_m`` (up) and
+    ``sigma_v_r_mps`` change. ``frames=0`` releases each record at once (a live receiver), with none of
+    these checks.
 
     Parameters
     ----------
@@ -996,14 +1037,30 @@ class ShapeLookahead:
             out.append(self._settle(*self._held.popleft()))
         return out
 
-    def _settle(self, record: MeasurementRecord, shape: tuple[float, float]) -> MeasurementRecord:
-        used_s, metres_per_s = shape
-        later_s = _K_MERGE * self.measurer._curvature_pool.delay_s
+    def _settle(self, record: MeasurementRecord,
+                shape: tuple[float, float, tuple[float, float] | None]) -> MeasurementRecord:
+        used_s, metres_per_s, fade = shape
+        meas = self.measurer
+        later_s = _K_MERGE * meas._curvature_pool.delay_s
         var = record.sigma_range_m**2 + metres_per_s**2 * max(0.0, later_s**2 - used_s**2)
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
-                            sigma_range_m=math.sqrt(var), half_frame_s=self.measurer.config.frame_duration_s / 2)
+                            sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
+        changes = {}
         if var > record.sigma_range_m**2:
-            record = dataclasses.replace(record, sigma_range_m=math.sqrt(var))
+            changes["sigma_range_m"] = math.sqrt(var)
+        if fade is not None:
+            # a whole-frame v_r: its fading-rate term from the pool that spans it (the frames before and after
+            # it) in place of the pool before it: the first frames of a recording have no earlier ones (a far
+            # recording's first frame 1.9 mm/s off with σ 0.4 where the next frames' σ was 1.2–2), and the
+            # larger of two pools' noise would inflate the rest. The frame's own rate stays the floor.
+            own_hz, used_hz = fade
+            to_mps = _K_FADE * meas.settings.sound_speed_mps / (2 * math.pi * meas.config.carrier_hz)
+            settled_hz = max(own_hz, meas.pooled_fade_rate_hz)
+            if settled_hz != used_hz:
+                var_v = record.sigma_v_r_mps**2 + to_mps**2 * (settled_hz**2 - used_hz**2)
+                changes["sigma_v_r_mps"] = math.sqrt(max(var_v, 0.0))
+        if changes:
+            record = dataclasses.replace(record, **changes)
         self._released.append(record)
         return record
 
