@@ -86,7 +86,7 @@ def test_noise_free_frame_measured_exactly_with_its_sign(v):
 def test_accuracy_at_10_db_within_a_few_crlb():
     arrivals = 0.2 + np.arange(6) * 1.0 + np.random.default_rng(1).uniform(0, 0.01, 6)
     # (arrivals jittered by up to 15 m at a constant 3 m/s are no track: each record's own σ is what is
-    # checked here, without the neighbours' track, ShapeLookahead)
+    # checked here, without the neighbours' track, RecordLookahead)
     recs, _, _ = _receive(_recording(arrivals, [3.0] * 6, 6.5, snr_db=10.0, seed=2), lookahead_frames=0)
     assert [r.frame_index for r in recs] == list(range(6))
     err_r = np.array([r.t_arrival_s for r in recs]) - arrivals

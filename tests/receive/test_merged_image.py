@@ -45,7 +45,7 @@ def _recording(seed: int, *, n_frames: int, snr_db: float, delta_s: float, image
     payloads = [f"mirror {k}".encode() for k in range(n_frames)]
     t_emit = 0.1 + np.arange(n_frames) * 1.0
     # a track closing at V (a random start: the same draws as before, the first one used), which the
-    # records' track check (ShapeLookahead) finds consistent
+    # records' track check (RecordLookahead) finds consistent
     tof = 0.55 + rng.uniform(0, 0.002, n_frames)[0] - V * (t_emit - t_emit[0]) / C
     x = multipath_recording(CFG, payloads, t_emit, tof, [(0.0, 1.0), (delta_s, image_gain)], v_mps=V,
                             snr_db=snr_db, rng=rng)
@@ -115,9 +115,8 @@ def test_frames_read_from_the_tone_share_the_pooled_bend(monkeypatch):
 def _fit(bend: complex, noise: float):
     from types import SimpleNamespace
 
-    # what the pool reads of a WholeFrameFit: |c|² less its noise expectation, the noise, c itself
-    return SimpleNamespace(curvature_ms_s4=np.array([abs(bend) ** 2 - noise]),
-                           curvature_noise_s4=np.array([noise]), curvature_s2=np.array([bend]))
+    # what the pool reads of a WholeFrameFit: c itself and its noise expectation
+    return SimpleNamespace(curvature_noise_s4=np.array([noise]), curvature_s2=np.array([bend]))
 
 
 def _noisy_bend(rng, bend: complex, noise: float) -> complex:

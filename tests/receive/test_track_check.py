@@ -1,4 +1,4 @@
-"""A frame whose direct path is gone, its echo taken for it: the neighbours' track says so (``ShapeLookahead``).
+"""A frame whose direct path is gone, its echo taken for it: the neighbours' track says so (``RecordLookahead``).
 
 One frame of eight has no direct path (faded out, shadowed): the only arrival is an echo 0.8 ms behind,
 which the pilot takes as the direct path, 1.2 m long with the σ of a clean frame (mm). Nothing in the

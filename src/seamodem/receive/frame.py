@@ -46,7 +46,7 @@ __all__ = [
     "BasebandBuffers",
     "FrameMeasurer",
     "ReceiverWarning",
-    "ShapeLookahead",
+    "RecordLookahead",
     "detector_options",
     "direct_path_share",
     "one_blas_thread",
@@ -304,7 +304,8 @@ class _CurvaturePool(_FramePool):
 
     Two means, the larger counted (:attr:`delay_s`, the arrival's bias bound):
 
-    - the fourth powers (``WholeFrameFit.curvature_ms_s4``, unbiased, with their noise σ) over the last
+    - the fourth powers (|``WholeFrameFit.curvature_s2``|² less their noise expectation
+      ``curvature_noise_s4``: unbiased, with that noise as their σ) over the last
       ``FADE_POOL_FRAMES``, when their mean stands 3 of its σ out of the noise: a bend whose phase moves
       from frame to frame (a fading echo) still adds there. At 1 km, a surface image 17 µs behind, the
       ends near the surface, bends one frame's channel by 2–3 of its σ at 20 dB (12 mm of bias, σ 0.3
@@ -326,11 +327,10 @@ class _CurvaturePool(_FramePool):
 
     def add_fit(self, wf: WholeFrameFit, first: int) -> None:
         """Pool the fit's direct-path curvature (``wf.curvature_*``; nothing when it has none)."""
-        if wf.curvature_ms_s4 is None:
+        if wf.curvature_s2 is None:
             return
-        noise = float(wf.curvature_noise_s4[first])
-        self.add(float(wf.curvature_ms_s4[first]), noise)
-        bend = complex(wf.curvature_s2[first]) if wf.curvature_s2 is not None else complex("nan")
+        bend, noise = complex(wf.curvature_s2[first]), float(wf.curvature_noise_s4[first])
+        self.add(abs(bend) ** 2 - noise, noise)
         if cmath.isfinite(bend) and math.isfinite(noise) and noise > 0:
             self._bends.append((bend, noise))
 
@@ -649,9 +649,13 @@ class FrameMeasurer:
         self._last_amplitude: tuple[float, float, float] | None = None
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
         #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate and the rate its v_r
-        #: took [Hz] (None: v_r not from a fit); :class:`ShapeLookahead` settles them with later frames
+        #: took [Hz] (None: v_r not from a fit); :class:`RecordLookahead` settles them with later frames
         self.last_shape: tuple[float, float, tuple[float, float] | None] = (0.0, 0.0, None)
-        self._fade_used_hz: tuple[float, float] | None = None
+
+    @property
+    def pooled_merge_delay_s(self) -> float:
+        """The merged-echo bias bound's σ from the channel curvature pooled over recent decoded frames [s]."""
+        return self._curvature_pool.delay_s
 
     @property
     def pooled_fade_rate_hz(self) -> float:
@@ -752,6 +756,7 @@ class FrameMeasurer:
             range_hint /= 2
         doppler, timing = self._doppler(m, dec, bb, t0_s, fs, excess, snr_direct_db, range_hint)
         sigma_bank = doppler.pop("sigma_bank")
+        fade_rates = doppler.pop("fade_rates_hz", None)  # (the fit's own, the one its v_r took): RecordLookahead
         # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
         # sees the same channel
         unmodelled = doppler.pop("sigma_tau_unmodelled", 0.0)
@@ -784,7 +789,7 @@ class FrameMeasurer:
         else:
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
-        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c, self._fade_used_hz)
+        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c, fade_rates)
         return MeasurementRecord(
             frame_index=int(k),
             t_emit_s=float(t_emit),
@@ -833,7 +838,6 @@ class FrameMeasurer:
         arrival the range.
         """
         c = self.settings.sound_speed_mps
-        self._fade_used_hz = None
         v_tone = m.v_tone_ml_mps
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
@@ -856,11 +860,11 @@ class FrameMeasurer:
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
         fit = self._whole_frame(m, dec, bb, t0_s, fs) if dec is not None and self.settings.whole_frame_doppler else None
         if fit is not None and fit[2] == "whole_frame":
-            # the channel's bend, from decoded frames only: decided symbols at low SNR rectify the noise,
-            # each sub-band's in proportion to its noise share, which the equal-energy sub-bands' outer ones
-            # have more of (a single path at −2 dB: ln|H| bent by 2 of its σ on every frame)
+            # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
+            # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
+            # single paths at −2 dB took 18–34 mm of range σ from it)
             self._curvature_pool.add_fit(fit[0], fit[1])
-        pooled_merge = self._curvature_pool.delay_s
+        pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
         if fit is not None and fit[2] == "whole_frame_decisions":
@@ -909,7 +913,6 @@ class FrameMeasurer:
             sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
                                               pooled_amp_rate_hz=pooled_rate, pooled_merge_delay_s=pooled_merge)
             own_rate = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
-            self._fade_used_hz = (own_rate, max(own_rate, pooled_rate))
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             # (the bank's σ with the pull of the echoes the fit sees over the pilot: without it, the steep
@@ -930,7 +933,8 @@ class FrameMeasurer:
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
-                        v_r_drift_mps2=float(wf.accel_mps2[first])), \
+                        v_r_drift_mps2=float(wf.accel_mps2[first]),
+                        fade_rates_hz=(own_rate, max(own_rate, pooled_rate))), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
@@ -973,14 +977,14 @@ class FrameMeasurer:
         return wf, first, source
 
 
-#: the radial jerk the track check allows [m/s³] (``ShapeLookahead``): circling at 8 m radius and
+#: the radial jerk the track check allows [m/s³] (``RecordLookahead``): circling at 8 m radius and
 #: 1.6 m/s, the closing speed's second derivative is about v·ω² ≈ 0.06; a straight leg's far less
 TRACK_JERK_MPS3 = 0.2
 #: neighbours further apart than this [s] are not compared by the track check
 _TRACK_MAX_GAP_S = 10.0
 
 
-class ShapeLookahead:
+class RecordLookahead:
     """Records held back until later frames have been measured (``ReceiverSettings.lookahead_frames``).
 
     What a frame cannot show about itself, its neighbours can:
@@ -1041,7 +1045,7 @@ class ShapeLookahead:
                 shape: tuple[float, float, tuple[float, float] | None]) -> MeasurementRecord:
         used_s, metres_per_s, fade = shape
         meas = self.measurer
-        later_s = _K_MERGE * meas._curvature_pool.delay_s
+        later_s = _K_MERGE * meas.pooled_merge_delay_s
         var = record.sigma_range_m**2 + metres_per_s**2 * max(0.0, later_s**2 - used_s**2)
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
                             sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
@@ -1067,7 +1071,7 @@ class ShapeLookahead:
 
 def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord], *,
                  sigma_range_m: float, half_frame_s: float = 0.0) -> float:
-    """The variance [m²] a record's range σ needs to reach its neighbours' track (``ShapeLookahead``).
+    """The variance [m²] a record's range σ needs to reach its neighbours' track (``RecordLookahead``).
 
     Parameters
     ----------

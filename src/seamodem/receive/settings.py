@@ -87,7 +87,7 @@ class ReceiverSettings:
     lookahead_frames : int
         Frames measured after a record before it is given out: its range σ
         then also covers the channel bend that those later frames show
-        (:class:`~seamodem.receive.frame.ShapeLookahead`; the first frames of
+        (:class:`~seamodem.receive.frame.RecordLookahead`; the first frames of
         a recording have no earlier ones). 0 gives each record out as soon as
         it is measured (a live receiver: ``rx --live`` uses 0).
 

@@ -24,7 +24,7 @@ from .frame import (  # noqa: F401  (direct_path_share, tone_fallback_sigma_mps:
     BasebandBuffers,
     FrameMeasurer,
     ReceiverWarning,
-    ShapeLookahead,
+    RecordLookahead,
     detector_options,
     direct_path_share,
     receiver_front_end,
@@ -122,7 +122,7 @@ class Receiver:
         measurer = FrameMeasurer(cfg, plan, emissions=self.emissions, settings=s, pilot=self.pilot,
                                  payloads=self.payloads, blanker=blanker, on_frame=self.on_frame)
         self.plan, self.blanker, self.detector, self.measurer = plan, blanker, det, measurer
-        self._lookahead = ShapeLookahead(measurer, s.lookahead_frames)
+        self._lookahead = RecordLookahead(measurer, s.lookahead_frames)
         state = BasebandBuffers()
         scan_from = 0
         pending: list[Detection] = []

@@ -96,21 +96,18 @@ class WholeFrameFit:
         √|d²ln H/df²| / 2π whatever Δ (the curvature is −w(1−w)(2πΔ)², and
         |Re w| ≤ √|w(1−w)| for |b| ≤ 1). The slope of ln|H| is left out: a
         loss that grows with frequency (absorption, a transducer) tilts it.
-    curvature_ms_s4 : numpy.ndarray
-        The same bound's fourth power [s⁴] from |c|² less its noise
-        expectation, not clipped at 0: unbiased, which the receiver averages
-        over frames (``FrameMeasurer``), a merged surface image lasting
-        while one frame's curvature is within its noise.
-    curvature_noise_s4 : numpy.ndarray
-        That noise expectation [s⁴], also the σ of ``curvature_ms_s4`` on a
-        channel without curvature.
     curvature_s2 : numpy.ndarray
-        The curvature itself, complex (ln|H|'s and the phase's) [s²], scaled
-        so that ``abs(curvature_s2)**2 - curvature_noise_s4`` is
-        ``curvature_ms_s4``: its noise is circular, ``curvature_noise_s4 / 2``
-        per component. It is invariant to the path's gain and delay, so a
-        channel whose echo stays put adds coherently over frames, where the
-        fourth powers add only in their mean (``FrameMeasurer``).
+        The direct path's curvature c itself, complex (ln|H|'s and the
+        phase's) [s²], scaled so that |c|² is the fourth power of the same
+        bound: ``abs(curvature_s2)**2 - curvature_noise_s4`` is that fourth
+        power less its noise expectation, unbiased, which the receiver averages
+        over frames (``FrameMeasurer``: a merged surface image lasts while one
+        frame's curvature is within its noise). c is invariant to the path's
+        gain and delay, so a channel whose echo stays put also adds coherently
+        over frames.
+    curvature_noise_s4 : numpy.ndarray
+        That noise expectation [s⁴] (circular: half of it per component of c),
+        also the σ of the unbiased fourth power on a channel without curvature.
     delay_scatter_s : numpy.ndarray
         Deviation of the segments' data-aided timings about their mean, less
         what the timing CRLB gives it [s] (a diagnostic: the segments' timing
@@ -130,9 +127,8 @@ class WholeFrameFit:
     amp_rate_hz: np.ndarray | None = None
     amp_rate_ms: np.ndarray | None = None
     tilt_delay_s: np.ndarray | None = None
-    curvature_ms_s4: np.ndarray | None = None
-    curvature_noise_s4: np.ndarray | None = None
     curvature_s2: np.ndarray | None = None
+    curvature_noise_s4: np.ndarray | None = None
     delay_scatter_s: np.ndarray | None = None
 
 
@@ -534,8 +530,7 @@ def fit_whole_frame(
     amp_rate_ms = np.zeros(n_paths)
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
-    curv_ms, curv_noise = np.zeros(n_paths), np.zeros(n_paths)
-    curv = np.zeros(n_paths, complex)
+    curv, curv_noise = np.zeros(n_paths, complex), np.zeros(n_paths)
     for p in range(n_paths):
         zs, ts = last_phase[p]
         # ln|Σz| has the phase's noise variance, 1/(2 SNR_seg) = counts·noise_var/(2|Σz|²); each term of the
@@ -580,12 +575,11 @@ def fit_whole_frame(
     # the curvature c (complex: ln|H| and the phase, per RMS-of-f squared) of 1 + b e^{−j2πfΔ} is −w(1−w)(2πΔ)²
     # at w = b e/(1 + b e), the bias Re(w)·Δ: for |b| ≤ 1, |Re w|/√|w(1 − w)| ≤ 1, so the bias is at most
     # √|d²ln H/df²|/2π = √(2|c|/span²)/2π whatever Δ (the slope alone would give |w(1−w)|·2πΔ²·span, 7×
-    # smaller for a 0.9 echo 17 µs behind). As a fourth power [s⁴]: |c|² less its noise expectation 2 cov,
-    # and that noise's σ (|c|² of noise alone is exponential: its σ is its mean)
+    # smaller for a 0.9 echo 17 µs behind). c scaled so that |c|² is that bound's fourth power [s⁴], and its
+    # noise expectation 2 cov, also that noise's σ (|c|² of noise alone is exponential: its σ is its mean)
     scale4 = 4 / (span2**2 * (2 * np.pi) ** 4)
-    curv_ms[p] = scale4 * (a[2] ** 2 + b[2] ** 2 - 2 * cov[2, 2])
-    curv_noise[p] = scale4 * 2 * cov[2, 2]
     curv[p] = math.sqrt(scale4) * complex(a[2], b[2])
+    curv_noise[p] = scale4 * 2 * cov[2, 2]
     c2 = a[2] ** 2 + b[2] ** 2 - 9 * 2 * cov[2, 2]  # |c|² beyond 3 of its noise σ, as the amplitude rate
     # the bias lies within ± the bound, its sign and size set by the echo's phase: its σ is that of a uniform
     # spread over it, bound/√3. A bend beyond |c| ≈ 1/2 is more than a weaker echo gives (several, or one
@@ -607,7 +601,6 @@ def fit_whole_frame(
         amp_rate_ms=amp_rate_ms[order],
         delay_scatter_s=scatter[order],
         tilt_delay_s=tilt[order],
-        curvature_ms_s4=curv_ms[order],
-        curvature_noise_s4=curv_noise[order],
         curvature_s2=curv[order],
+        curvature_noise_s4=curv_noise[order],
     )

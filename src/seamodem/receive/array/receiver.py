@@ -17,7 +17,7 @@ import numpy as np
 from ...config import FrameConfig
 from ...errors import ConfigError, InputFileError
 from ...transmit.pilot import pilot_symbols
-from ..frame import (BasebandBuffers, FrameMeasurer, ReceiverWarning, ShapeLookahead, detector_options,
+from ..frame import (BasebandBuffers, FrameMeasurer, ReceiverWarning, RecordLookahead, detector_options,
                      one_blas_thread)
 from ..measure import NOISE_WINDOW_S
 from ..records import MeasurementRecord
@@ -127,7 +127,7 @@ def receive_array(
         measurer = FrameMeasurer(config, plan, emissions=emissions, settings=s, pilot=pilot, payloads=payloads,
                                  blanker=blanker)
         span = measurer.span_s
-        lookahead = ShapeLookahead(measurer, s.lookahead_frames)
+        lookahead = RecordLookahead(measurer, s.lookahead_frames)
         y_bb, y_tone = bb[:, reference_channel].copy(), tone[:, reference_channel].copy()
         f_data, f_tone = plan.data.centre_hz, plan.tone.centre_hz
         records: list[MeasurementRecord] = []
