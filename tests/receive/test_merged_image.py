@@ -136,9 +136,9 @@ def test_a_steady_bend_below_one_frames_noise_adds_up_coherently():
             pool.add_fit(_fit(_noisy_bend(rng, bend, noise), noise), 0)
         counted_coherent += pool.coherent_s4() > 0
         counted_powers += pool.standing_mean(3.0) > 0
-    # 10 frames: |c̄|² about 9 times its noise against a threshold of 6.9 (counted in 67 % of 2000 pools);
+    # 10 frames: |c̄|² about 9 times its noise against a threshold of 4.6 (counted in 88 % of 200 pools);
     # the powers' mean 2.5 of its σ against 3 (22 %)
-    assert counted_coherent >= 110, counted_coherent
+    assert counted_coherent >= 150, counted_coherent
     assert counted_powers <= 70, counted_powers
     # counted, the bound is the bend's: (|c|²)^(1/4)/√3 within a factor 1.5 on a typical pool
     pool = _CurvaturePool()
@@ -160,8 +160,8 @@ def test_noise_alone_rarely_counts_and_a_turning_bend_still_does():
         for _ in range(CURVATURE_POOL_FRAMES):
             pool.add_fit(_fit(_noisy_bend(rng, 0.0, noise), noise), 0)
         false_alarms += pool.coherent_s4() > 0
-    # exponential |c̄|²/floor under noise: beyond ln(1000) once in 1000 (binomial 3σ: 2 … 38 in 20000)
-    assert 2 <= false_alarms <= 38, false_alarms
+    # exponential |c̄|²/floor under noise: beyond ln(100) once in 100 (binomial 3σ: 158 … 242 in 20000)
+    assert 158 <= false_alarms <= 242, false_alarms
     # a bend whose phase turns from frame to frame (a fading echo) cancels in the coherent mean; the
     # powers' mean still counts it
     pool = _CurvaturePool()

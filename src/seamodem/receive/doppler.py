@@ -23,7 +23,7 @@ and in the tone baseband (carrier f_pt) the tone is a w(·) e^{j2π f_pt ε t}.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -362,12 +362,14 @@ class ToneFit:
     amp_rate_hz : float
         RMS rate of the tone's log-amplitude over the frame [1/s] (line and
         parabola through 16 segments' ln|Σ w x e^{−j2πft}|, each term less its
-        noise expectation): a fading or beating tone's phase wanders at the
+        noise expectation, the parabola's beyond 3 of its σ,
+        :func:`log_amplitude_rate`): a fading or beating tone's phase wanders at the
         same scale, a speed error c·rate/(2π f_pt).
-    amp_rate_ms : float
-        The same rate's mean square [1/s²], each term less its noise
-        expectation but not clipped at 0 (unbiased: the receiver averages it
-        over frames, :func:`log_amplitude_rate`).
+    amp_rate_terms : numpy.ndarray, shape (2, 2)
+        The same rate's terms (the slope's, the parabola's), each less its
+        noise expectation but not clipped at 0, with that noise's σ
+        (unbiased: the receiver averages them over frames,
+        :func:`log_amplitude_rate`).
     """
 
     offset_hz: float
@@ -375,7 +377,7 @@ class ToneFit:
     c_n0_hz: float
     spread_hz: float = 0.0
     amp_rate_hz: float = 0.0
-    amp_rate_ms: float = 0.0
+    amp_rate_terms: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
 
 
 #: a residual spectral line counts when its periodogram bin stands above the noise floor by ln(bins / this):
@@ -457,30 +459,31 @@ def tone_frequency_ml(
     # the white noise's variance from the residual's sample-to-sample differences: a fading tone's slow
     # amplitude changes, which the residual also holds, are what the rate is to measure, not noise
     white = float(np.mean(np.abs(np.diff(resid)) ** 2)) / 2 if resid.size > 1 else variance
-    rate, rate_ms = _amplitude_rate_hz(wx * np.exp(-2j * np.pi * f * tc), weights, tc, white)
+    rate, rate_terms = _amplitude_rate_hz(wx * np.exp(-2j * np.pi * f * tc), weights, tc, white)
     return ToneFit(offset_hz=float(f), amplitude=complex(amplitude), c_n0_hz=float(c_n0), spread_hz=spread,
-                   amp_rate_hz=rate, amp_rate_ms=rate_ms)
+                   amp_rate_hz=rate, amp_rate_terms=rate_terms)
 
 
 #: segments of the tone whose log-amplitudes give its rate (``ToneFit.amp_rate_hz``)
 _TONE_SEGMENTS = 16
 
 
-def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float) -> tuple[float, float]:
+def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise_var: float
+                       ) -> tuple[float, np.ndarray]:
     """:func:`log_amplitude_rate` of ln|Σ y| over ``_TONE_SEGMENTS``
     segments of equal weight (y = w·x·e^{−j2πft}, the tone at its fitted frequency), each segment's
     ln-amplitude noise variance noise_var·Σw²/(2|Σy|²)."""
     w2 = weights**2
     cum = np.cumsum(w2)
     if cum[-1] <= 0:
-        return 0.0, 0.0
+        return 0.0, np.zeros((2, 2))
     seg = np.minimum((cum / cum[-1] * _TONE_SEGMENTS).astype(int), _TONE_SEGMENTS - 1)
     sums = np.bincount(seg, y.real, _TONE_SEGMENTS) + 1j * np.bincount(seg, y.imag, _TONE_SEGMENTS)
     energy = np.bincount(seg, w2, _TONE_SEGMENTS)
     times = np.bincount(seg, w2 * tc, _TONE_SEGMENTS) / np.maximum(energy, np.finfo(float).tiny)
     power = np.abs(sums) ** 2
     if np.any(energy <= 0) or np.any(power <= 0):
-        return 0.0, 0.0
+        return 0.0, np.zeros((2, 2))
     var = np.maximum(noise_var * energy / (2 * power), 1e-12)
     duration = float(times[-1] - times[0]) * _TONE_SEGMENTS / (_TONE_SEGMENTS - 1)
     log_amp = np.log(np.sqrt(power) / energy)
@@ -488,9 +491,9 @@ def _amplitude_rate_hz(y: np.ndarray, weights: np.ndarray, tc: np.ndarray, noise
 
 
 def log_amplitude_rate(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *, duration_s: float
-                       ) -> tuple[float, float]:
-    """RMS rate over a stretch of a phasor's log-amplitude [1/s], less what its noise gives it, and its
-    mean square unclipped [1/s²].
+                       ) -> tuple[float, np.ndarray]:
+    """RMS rate over a stretch of a phasor's log-amplitude [1/s], less what its noise gives it, and the
+    terms it is made of, unclipped.
 
     A line and a parabola a0 + a1·t + a2·t² are fitted to the segments' log-amplitudes by weighted
     least squares; the rate's mean square over t uniform in ±D/2 is a1² + a2²·D²/3, each squared
@@ -498,6 +501,11 @@ def log_amplitude_rate(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *,
     wanders at the same scale as its log-amplitude (the real and imaginary parts of one analytic
     function): c·rate/(2πf) is then a speed error at carrier f (the whole-frame fit's
     ``WholeFrameFit.amp_rate_hz``, the tone's ``ToneFit.amp_rate_hz``).
+
+    The slope's noise is the phase slope's (the fit's own Doppler σ), and less its expectation, clipped
+    at 0, noise alone leaves 0.67 of it. The parabola's term has five times that noise over the
+    stretch: it counts only beyond 3 of its σ (clipped at 0 alone, noise had left 1.7 of the fit's σ
+    there: the corpus's steep family, which does not fade, had whole-frame v_r σ 1.6 times its errors).
 
     Parameters
     ----------
@@ -513,18 +521,20 @@ def log_amplitude_rate(log_amp: np.ndarray, var: np.ndarray, t_s: np.ndarray, *,
     Returns
     -------
     rate_hz : float
-        √ of the mean square with each term clipped at 0: this frame's rate.
-    mean_square : float
-        The same terms unclipped, negative when the noise gave more than its expectation: unbiased, so
-        that its average over frames is too (``FrameMeasurer`` pools it; the clipped rate would average
-        to a positive scale on a channel that does not fade).
+        √ of the slope's term clipped at 0 plus the parabola's beyond 3 of its σ: this frame's rate.
+    terms : numpy.ndarray, shape (2, 2)
+        Rows the slope's a1² and the parabola's a2²·D²/3, each less its noise expectation but not
+        clipped (unbiased, so that their average over frames is too: ``FrameMeasurer`` pools them);
+        columns that value [1/s²] and its noise σ (√2 times the expectation).
     """
     design = np.column_stack([np.ones(t_s.size), t_s, t_s**2])
     cov = np.linalg.inv(design.T @ (design / var[:, None]))
     a = cov @ (design.T @ (log_amp / var))
     slope, curve = a[1] ** 2 - cov[1, 1], a[2] ** 2 - cov[2, 2]
     k = duration_s**2 / 3
-    return float(math.sqrt(max(slope, 0.0) + max(curve, 0.0) * k)), float(slope + curve * k)
+    counted = curve if a[2] ** 2 > 9 * cov[2, 2] else 0.0
+    terms = np.array([[slope, math.sqrt(2) * cov[1, 1]], [curve * k, math.sqrt(2) * k * cov[2, 2]]])
+    return float(math.sqrt(max(slope, 0.0) + counted * k)), terms
 
 
 def tone_track_eq9(

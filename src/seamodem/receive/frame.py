@@ -282,21 +282,49 @@ class _FramePool:
         return mean if mean > k * float(np.sqrt(np.sum(noise**2))) / len(values) else 0.0
 
 
-class _RatePool(_FramePool):
-    """A log-amplitude rate's unbiased mean squares (``log_amplitude_rate``'s second value) of the last
-    ``FADE_POOL_FRAMES`` frames; :attr:`rate_hz` is √ of their mean, 0 when that is negative or none."""
+#: a pooled rate's term counts when its mean stands this many of its noise σ out of 0 (``_RatePool``)
+_RATE_POOL_K = 3.0
+
+
+class _RatePool:
+    """A log-amplitude rate's terms (``log_amplitude_rate``'s: the line's and the parabola's mean squares,
+    each less its noise expectation, with that noise's σ) over the last ``FADE_POOL_FRAMES`` frames.
+
+    :attr:`rate_hz` is √ of the sum of the terms' means that stand :data:`_RATE_POOL_K` of their σ out
+    of 0 (0 with none). Apart, because the parabola's noise is five times the line's over a frame: summed,
+    a slope wander 3 times the line's noise σ on every frame was not counted, and clipped at 0 alone,
+    noise counted in half the pools (the corpus's steep family, no fading: whole-frame v_r σ 1.6 times
+    its errors).
+    """
+
+    def __init__(self):
+        self._items: collections.deque[np.ndarray] = collections.deque(maxlen=FADE_POOL_FRAMES)
+
+    def add(self, terms: np.ndarray) -> None:
+        """One frame's terms: rows of (mean square [1/s²], its noise σ)."""
+        terms = np.asarray(terms, float)
+        if np.all(np.isfinite(terms)):
+            self._items.append(terms)
 
     @property
     def rate_hz(self) -> float:
-        return math.sqrt(self.standing_mean(0.0))
+        if not self._items:
+            return 0.0
+        stack = np.array(self._items)  # (frames, terms, 2)
+        n = stack.shape[0]
+        mean = stack[:, :, 0].mean(axis=0)
+        sd = np.sqrt(np.sum(stack[:, :, 1] ** 2, axis=0)) / n
+        return math.sqrt(float(np.sum(np.where(mean > _RATE_POOL_K * sd, mean, 0.0))))
 
 
 #: frames whose complex channel curvatures are averaged (``_CurvaturePool``): a merged surface image's
 #: geometry changes over minutes at a kilometre, so ten frames see the same bend
 CURVATURE_POOL_FRAMES = 10
 #: the coherent mean's |c̄|² over its noise expectation beyond which it counts: noise alone leaves an
-#: exponential ratio of mean 1, beyond ln(1000) once in 1000 pools
-_COHERENT_THRESHOLD = math.log(1000.0)
+#: exponential ratio of mean 1, beyond ln(100) once in 100 pools (at ln(1000), a far recording at −1 dB
+#: whose ten bends all pointed one way ended at 6.86 and its frames 4–8σ off; counted, the false alarm's
+#: bound is that of a bend at the noise's scale)
+_COHERENT_THRESHOLD = math.log(100.0)
 
 
 class _CurvaturePool(_FramePool):
@@ -314,7 +342,7 @@ class _CurvaturePool(_FramePool):
       last :data:`CURVATURE_POOL_FRAMES`: an echo that stays put adds coherently, its |c̄|² growing
       as the frames' count against the noise's, where the fourth powers' mean grows as its root.
       Counted beyond :data:`_COHERENT_THRESHOLD` times its noise expectation, less that expectation
-      (unbiased). A steady bend whose |c|² is 0.8 of one frame's noise expectation: counted in 67 % of
+      (unbiased). A steady bend whose |c|² is 0.8 of one frame's noise expectation: counted in 88 % of
       10-frame pools by the coherent mean, 22 % by the fourth powers' (``tests/receive/test_merged_image.py``).
 
     Fits on decisions do not feed it: at −3.5 dB their |c|² is 3.3 times the noise expectation the
@@ -685,7 +713,8 @@ class FrameMeasurer:
         dt = t - last[0]
         # (the range dt earlier, closing at v: R + v·dt)
         rate = (ln_a - last[1] - math.log1p(max(float(wf.v_mps[first]) * dt / range_m, -0.5))) / dt
-        self._slow_fade_pool.add(rate**2 - (var + last[2]) / dt**2)
+        noise = (var + last[2]) / dt**2
+        self._slow_fade_pool.add(np.array([[rate**2 - noise, math.sqrt(2) * noise]]))
 
     def measure(self, detection: Detection, window: BasebandBuffers) -> MeasurementRecord:
         """Measure (and decode) one detection whose span the window holds.
@@ -852,7 +881,7 @@ class FrameMeasurer:
         # where the direct path's does not (given to the data band too, it took the corpus's steep and
         # impulsive families' RMS err/σ from 0.7–0.8 to 0.03–0.3; a fading single path at −2.8 dB: tone rows
         # 4.3σ and 3.8σ → 2.0σ with it)
-        self._tone_fade_pool.add(m.tone.amp_rate_ms)
+        self._tone_fade_pool.add(m.tone.amp_rate_terms)
         sigma_tone = math.hypot(sigma_tone, max(m.tone.amp_rate_hz, self._tone_fade_pool.rate_hz)
                                 * c / (2 * math.pi * self.config.tone_hz))
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
@@ -906,8 +935,8 @@ class FrameMeasurer:
             # a frame whose amplitude stayed flat had the fit's noise alone as σ while its phase wandered (the
             # corpus's fading family, whole-frame v_r 0.91 within 3σ, worst 9σ; pooled over 5 frames 0.98)
             if source == "whole_frame":
-                if wf.amp_rate_ms is not None:
-                    self._fade_pool.add(float(wf.amp_rate_ms[first]))
+                if wf.amp_rate_terms is not None:
+                    self._fade_pool.add(wf.amp_rate_terms[first])
                 self._frame_to_frame(wf, first, range_m)
             pooled_rate = self.pooled_fade_rate_hz
             sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,

@@ -78,14 +78,16 @@ class WholeFrameFit:
     amp_rate_hz : numpy.ndarray
         RMS over the frame of the rate of each path's log-amplitude [1/s],
         from a line and a parabola fitted to the segments' ln|Σz| (as their
-        phases), each term less its noise expectation (0 when below it).
+        phases), each term less its noise expectation (0 when below it), the
+        parabola's only beyond 3 of its σ (``log_amplitude_rate``).
         A path that fades, or that an unresolved echo beats with, changes
         amplitude: for a Rician or two-phasor sum the log-amplitude rate and
         the phase-rate error (a Doppler error) have the same scale.
-    amp_rate_ms : numpy.ndarray
-        The same rate's mean square [1/s²], each term less its noise
-        expectation but not clipped at 0: an unbiased estimate, which the
-        receiver averages over frames (``FrameMeasurer``).
+    amp_rate_terms : numpy.ndarray, shape (n_paths, 2, 2)
+        The same rate's terms (the slope's, the parabola's) [1/s²], each less
+        its noise expectation but not clipped at 0, with that noise's σ:
+        unbiased estimates, which the receiver averages over frames
+        (``FrameMeasurer``).
     tilt_delay_s : numpy.ndarray
         The direct path's channel shape across its band as a bound on its
         arrival's bias [s] (0 for the other paths): from 4 equal-energy
@@ -125,7 +127,7 @@ class WholeFrameFit:
     sigma_delay_s: np.ndarray
     n_reference: int
     amp_rate_hz: np.ndarray | None = None
-    amp_rate_ms: np.ndarray | None = None
+    amp_rate_terms: np.ndarray | None = None
     tilt_delay_s: np.ndarray | None = None
     curvature_s2: np.ndarray | None = None
     curvature_noise_s4: np.ndarray | None = None
@@ -527,7 +529,7 @@ def fit_whole_frame(
     crlb_d = 1.0 / (2 * np.pi * gabor_bandwidth_hz(config.symbol_rate_hz, config.rolloff)
                     * np.sqrt(2 * n_ref * np.maximum(es_n0, 1e-30)))
     amp_rate = np.zeros(n_paths)
-    amp_rate_ms = np.zeros(n_paths)
+    amp_rate_terms = np.zeros((n_paths, 2, 2))
     scatter = np.zeros(n_paths)
     tilt = np.zeros(n_paths)
     curv, curv_noise = np.zeros(n_paths, complex), np.zeros(n_paths)
@@ -540,7 +542,8 @@ def fit_whole_frame(
         # fit's own σ
         var = counts * noise_var / (2 * np.maximum(np.abs(zs) ** 2, np.finfo(float).tiny))
         log_amp = np.log(np.maximum(np.abs(zs), np.finfo(float).tiny))
-        amp_rate[p], amp_rate_ms[p] = log_amplitude_rate(log_amp, var, ts, duration_s=config.frame_duration_s)
+        amp_rate[p], amp_rate_terms[p] = log_amplitude_rate(log_amp, var, ts,
+                                                            duration_s=config.frame_duration_s)
         d_seg, wt = last_timing[p]
         dm = float(np.sum(wt * d_seg) / np.sum(wt))
         spread2 = float(np.sum(wt * (d_seg - dm) ** 2) / np.sum(wt))
@@ -598,7 +601,7 @@ def fit_whole_frame(
         sigma_delay_s=np.maximum(sigma_d, crlb_d)[order],
         n_reference=int(n_ref),
         amp_rate_hz=amp_rate[order],
-        amp_rate_ms=amp_rate_ms[order],
+        amp_rate_terms=amp_rate_terms[order],
         delay_scatter_s=scatter[order],
         tilt_delay_s=tilt[order],
         curvature_s2=curv[order],
