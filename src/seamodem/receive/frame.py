@@ -36,7 +36,7 @@ from .detect import Detection
 from .frontend import FrontEndPlan, plan_front_end
 from .impulse import ImpulseBlanker
 from .measure import FrameMeasurement, frame_span_s, impulse_excess, measure_frame
-from .multipath import find_echoes
+from .multipath import find_echoes, sidelobe_pull_s
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .two_way import two_way_range_m
@@ -466,6 +466,24 @@ def bank_echo_sigma_mps(wf: WholeFrameFit, first: int, config: FrameConfig) -> f
     return math.sqrt(total / 3) if math.isfinite(total) else 0.0
 
 
+def pilot_sidelobe_sigma_s(wf: WholeFrameFit, first: int, modelled_s: np.ndarray, config: FrameConfig,
+                           pilot: np.ndarray, *, eps: float = 0.0) -> float:
+    """σ [s] of the pilot's arrival from the echoes the whole-frame fit holds and the pilot's arrival fit
+    did not model (none of its paths within half a symbol): :func:`~seamodem.receive.multipath.sidelobe_pull_s`.
+    """
+    a0 = abs(complex(wf.amplitudes[first]))
+    if not a0 > 0:
+        return 0.0
+    half = config.symbol_period_s / 2
+    modelled = np.asarray(modelled_s, float)
+    keep = [p for p in range(len(wf.delays_s)) if p != first
+            and not np.any(np.abs(modelled - float(wf.delays_s[p])) < half)]
+    if not keep:
+        return 0.0
+    lags = np.asarray(wf.delays_s)[keep] - float(wf.delays_s[first])
+    return sidelobe_pull_s(config, pilot, lags, np.abs(np.asarray(wf.amplitudes)[keep]) / a0, eps=eps)
+
+
 def time_scale_delay_s(sigma_v_mps: float, config: FrameConfig, *, sound_speed_mps: float) -> float:
     """The frame-start arrival's σ [s] from a σ of the Doppler that sets the symbol instants' time scale.
 
@@ -785,6 +803,8 @@ class FrameMeasurer:
             range_hint /= 2
         doppler, timing = self._doppler(m, dec, bb, t0_s, fs, excess, snr_direct_db, range_hint)
         sigma_bank = doppler.pop("sigma_bank")
+        # the pilot's arrival: its CRLB and the pull of the echoes it did not model (the fit's, where one was made)
+        sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_pilot_pull"))
         fade_rates = doppler.pop("fade_rates_hz", None)  # (the fit's own, the one its v_r took): RecordLookahead
         # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
         # sees the same channel
@@ -924,6 +944,11 @@ class FrameMeasurer:
             elif math.isfinite(v_tone) and not (abs(v - v_tone) <= 3 * math.hypot(grown, sigma_tone_gap)
                                                 and grown < sigma_tone_gap):
                 fit, rejected = None, (v, grown, fit)
+        # the echoes a fit (used or set aside) holds that the pilot's arrival fit did not model pull that
+        # arrival through the pilot's sidelobes (pilot_sidelobe_sigma_s)
+        shown = fit if fit is not None else (rejected[2] if rejected is not None else None)
+        pilot_pull = 0.0 if shown is None else pilot_sidelobe_sigma_s(
+            shown[0], shown[1], m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
         sigma_tau_rejected = 0.0
         if rejected is not None:
             sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c,
@@ -963,7 +988,8 @@ class FrameMeasurer:
                 math.hypot(sigma_v_un, sigma_2c), self.config, sound_speed_mps=c))
             shape = channel_shape_delay_s(wf, first, pooled_merge)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
-            return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, v_r_source=source, v_r_tone_mps=v_tone,
+            return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, sigma_tau_pilot_pull=pilot_pull,
+                        v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first]),
@@ -972,10 +998,12 @@ class FrameMeasurer:
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
-            return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank, v_r_source="bank",
+            return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank,
+                        sigma_tau_pilot_pull=pilot_pull, v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s),
                         sigma_tau_unmodelled=sigma_tau_unmodelled), None
-        return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank, v_r_source="tone",
+        return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank,
+                    sigma_tau_pilot_pull=pilot_pull, v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
                     n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_unmodelled), None
 

@@ -40,7 +40,7 @@ from ..dsp import UniformTable
 from .detect import pilot_template
 from .doppler import dichotomy_max, matched_filter, table_read
 
-__all__ = ["PathFit", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine"]
+__all__ = ["PathFit", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine", "sidelobe_pull_s"]
 
 #: pilot autocorrelation lags kept in the model (|ρ_d| ≪ Np beyond: well-chosen pilot)
 _SIDELOBE_LAGS = 12
@@ -385,6 +385,55 @@ def direct_path_doppler(
         return float(np.sum(np.abs(qh @ (y * np.exp(-2j * np.pi * config.carrier_hz * d * tau))) ** 2))
 
     return eps + dichotomy_max(explained, -search, search, tol=1e-9)
+
+
+@lru_cache(maxsize=8)
+def _aperiodic_autocorrelation(pilot_bytes: bytes) -> tuple[np.ndarray, np.ndarray]:
+    """(lags, ρ_d = Σ_n a[n+d]·conj a[n]) of the pilot symbols, every lag."""
+    a = np.frombuffer(pilot_bytes, dtype=complex)
+    return np.arange(-(a.size - 1), a.size), np.correlate(a, a, mode="full")
+
+
+def sidelobe_pull_s(config: FrameConfig, pilot: np.ndarray, lags_s, amplitudes, *, eps: float = 0.0) -> float:
+    """σ [s] of the pilot's arrival from echoes its fit does not model, through the pilot's sidelobes.
+
+    The arrival fit (:func:`fit_paths`) models the pilot correlation near the first path with the
+    pilot's autocorrelation to ±``_SIDELOBE_LAGS`` lags and the paths it found. An echo it did not
+    model, b at Δ (one found later over the whole frame, typically beyond its ±12-symbol window),
+    still reaches the direct peak through the pilot's aperiodic sidelobes (|ρ_d| ~ √Np at any lag)
+    and pulls it by Re(b·R′(−Δ))/|R″(0)|, R(u) = Σ_d ρ_d rc(u − d) (u in symbols). Each echo's
+    |b·R′(−Δ)|/|R″(0)| (its phase unknown: /√2, the RMS of the real part) adds in quadrature.
+    On the corpus's impulsive family at 15 dB (a surface echo 0.82 at 19 symbols, a bottom echo 0.48
+    at 73): pulls of 0.5–5 mm as the echo's lag moves, where the arrival's CRLB was 1.0 mm.
+
+    Parameters
+    ----------
+    config : FrameConfig
+        The frame (symbol period, roll-off).
+    pilot : numpy.ndarray
+        Pilot symbols.
+    lags_s : array_like
+        The unmodelled echoes' delays after the direct path [s].
+    amplitudes : array_like
+        Their amplitudes relative to the direct path's (|b|).
+    eps : float
+        The Doppler's time scale v/c (symbol period T/(1 + eps)).
+    """
+    lags_s, amplitudes = np.atleast_1d(np.asarray(lags_s, float)), np.abs(np.atleast_1d(amplitudes))
+    if lags_s.size == 0:
+        return 0.0
+    lags, rho = _aperiodic_autocorrelation(np.asarray(pilot, dtype=complex).tobytes())
+    T = config.symbol_period_s / (1 + eps)
+    h = 1e-3  # [symbols]
+
+    def response(u: np.ndarray) -> np.ndarray:
+        return raised_cosine(u[:, None] - lags[None, :], 1.0, config.rolloff) @ rho
+
+    curv = abs(complex(np.sum(response(np.array([h, -h]))) - 2 * response(np.array([0.0]))[0])) / h**2
+    u = -lags_s / T
+    slope = (response(u + h) - response(u - h)) / (2 * h)
+    pull = amplitudes * np.abs(slope) / curv * T
+    return float(math.sqrt(np.sum(pull**2) / 2))
 
 
 def find_echoes(
