@@ -298,23 +298,21 @@ class _RatePool:
     """
 
     def __init__(self):
-        self._items: collections.deque[np.ndarray] = collections.deque(maxlen=FADE_POOL_FRAMES)
+        self._terms: list[_FramePool] = []
 
     def add(self, terms: np.ndarray) -> None:
         """One frame's terms: rows of (mean square [1/s²], its noise σ)."""
         terms = np.asarray(terms, float)
-        if np.all(np.isfinite(terms)):
-            self._items.append(terms)
+        if not np.all(np.isfinite(terms)):
+            return
+        while len(self._terms) < len(terms):
+            self._terms.append(_FramePool())
+        for pool, (value, noise_sd) in zip(self._terms, terms):
+            pool.add(value, noise_sd)
 
     @property
     def rate_hz(self) -> float:
-        if not self._items:
-            return 0.0
-        stack = np.array(self._items)  # (frames, terms, 2)
-        n = stack.shape[0]
-        mean = stack[:, :, 0].mean(axis=0)
-        sd = np.sqrt(np.sum(stack[:, :, 1] ** 2, axis=0)) / n
-        return math.sqrt(float(np.sum(np.where(mean > _RATE_POOL_K * sd, mean, 0.0))))
+        return math.sqrt(sum(pool.standing_mean(_RATE_POOL_K) for pool in self._terms))
 
 
 #: frames whose complex channel curvatures are averaged (``_CurvaturePool``): a merged surface image's
