@@ -170,6 +170,13 @@ def _ls_residual_energy(store, index, corr):
     return energy
 
 
+@lru_cache(maxsize=8)
+def _aperiodic_autocorrelation(pilot_bytes: bytes) -> tuple[np.ndarray, np.ndarray]:
+    """(lags, ρ_d = Σ_n a[n+d]·conj a[n]) of the pilot symbols, every lag."""
+    a = np.frombuffer(pilot_bytes, dtype=complex)
+    return np.arange(-(a.size - 1), a.size), np.correlate(a, a, mode="full")
+
+
 def fit_paths(
     r: np.ndarray,
     fs: float,
@@ -216,8 +223,8 @@ def fit_paths(
     T = config.symbol_period_s
     a = np.asarray(pilot, dtype=complex)
     n_p = len(a)
-    lags = np.arange(-_SIDELOBE_LAGS, _SIDELOBE_LAGS + 1)
-    rho = np.array([np.vdot(a[: n_p - abs(d)], a[abs(d) :]).real for d in lags])  # real ±1 pilot: symmetric
+    # ρ_d for |d| ≤ _SIDELOBE_LAGS (real ±1 pilot: symmetric)
+    rho = _aperiodic_autocorrelation(a.tobytes())[1][n_p - 1 - _SIDELOBE_LAGS: n_p + _SIDELOBE_LAGS].real
     # the received pilot is compressed by 1 + ε: a template at frame times τ_a + i(1 + ε)/fs
     # lies on the recording's grid; uncompressed, the fit would be τ_centroid·ε early (33 µs at 3 m/s)
     template, tau_a = _pilot_template(config, fs / (1 + eps), a.tobytes())
@@ -385,13 +392,6 @@ def direct_path_doppler(
         return float(np.sum(np.abs(qh @ (y * np.exp(-2j * np.pi * config.carrier_hz * d * tau))) ** 2))
 
     return eps + dichotomy_max(explained, -search, search, tol=1e-9)
-
-
-@lru_cache(maxsize=8)
-def _aperiodic_autocorrelation(pilot_bytes: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """(lags, ρ_d = Σ_n a[n+d]·conj a[n]) of the pilot symbols, every lag."""
-    a = np.frombuffer(pilot_bytes, dtype=complex)
-    return np.arange(-(a.size - 1), a.size), np.correlate(a, a, mode="full")
 
 
 def sidelobe_pull_s(config: FrameConfig, pilot: np.ndarray, lags_s, amplitudes, *, eps: float = 0.0) -> float:
