@@ -84,7 +84,8 @@ def add_parser(sub) -> None:
     p.add_argument("--v-max", type=float, default=5.0, metavar="M/S", help="largest |v_r| searched (default 5 m/s)")
     p.add_argument("--lookahead", type=int, metavar="FRAMES",
                    help="frames measured after a record before it is written (default 5; live: 0): its range σ then "
-                        "also covers a merged echo's bend that those frames show, and its gap to their track")
+                        "also covers a merged echo's bend that those frames show and its gap to their track, and its "
+                        "v_r σ its gap to their ranges")
     p.add_argument(
         "--false-alarms-per-hour",
         type=float,

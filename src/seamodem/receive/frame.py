@@ -59,6 +59,9 @@ __all__ = [
     "time_scale_delay_s",
     "unmodelled_sigmas",
     "channel_shape_delay_s",
+    "kinematic_gaps",
+    "gap_excess",
+    "range_gaps",
 ]
 
 _BLAS = None
@@ -694,7 +697,7 @@ class FrameMeasurer:
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
         #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate and the rate its v_r
         #: took [Hz] (None: v_r not from a fit); :class:`RecordLookahead` settles them with later frames
-        self.last_shape: tuple[float, float, tuple[float, float] | None] = (0.0, 0.0, None)
+        self.last_shape: tuple[float, float, tuple[float, float] | None, float] = (0.0, 0.0, None, 0.0)
 
     @property
     def pooled_merge_delay_s(self) -> float:
@@ -803,6 +806,7 @@ class FrameMeasurer:
         sigma_bank = doppler.pop("sigma_bank")
         # the pilot's arrival: its CRLB and the pull of the echoes it did not model (the fit's, where one was made)
         sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_pilot_pull"))
+        noise_tau = sigma_tau  # the arrival's σ of noise, frame to frame (RecordLookahead's kinematic check)
         fade_rates = doppler.pop("fade_rates_hz", None)  # (the fit's own, the one its v_r took): RecordLookahead
         # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
         # sees the same channel
@@ -829,6 +833,7 @@ class FrameMeasurer:
             excess = (t_fit - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
             if doppler["v_r_source"] == "whole_frame":
                 t_arr, sigma_tau = t_fit, sigma_fit
+                noise_tau = sigma_fit
             sigma_tau = math.sqrt(sigma_tau**2 + sigma_shape**2 + max(0.0, excess))
             shape_used = sigma_shape
         sigma_tau = math.hypot(sigma_tau, sigma_first)
@@ -840,7 +845,7 @@ class FrameMeasurer:
         else:
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
-        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c, fade_rates)
+        self.last_shape = (shape_used, c / 2 if s.turnaround_s is not None else c, fade_rates, noise_tau)
         return MeasurementRecord(
             frame_index=int(k),
             t_emit_s=float(t_emit),
@@ -1041,6 +1046,22 @@ class FrameMeasurer:
 TRACK_JERK_MPS3 = 0.2
 #: neighbours further apart than this [s] are not compared by the track check
 _TRACK_MAX_GAP_S = 10.0
+#: the closing speed's third derivative the kinematic check allows [m/s⁴] (``kinematic_gaps``): circling at
+#: 8 m radius and 1.6 m/s, v·ω³ ≈ 0.013
+TRACK_SNAP_MPS4 = 0.05
+#: frames further apart than this [s] are not used by the kinematic check (a quadratic speed over the span)
+_KIN_MAX_GAP_S = 4.0
+#: frames on each side of a record whose kinematic gaps are pooled with its own (``RecordLookahead``)
+_KIN_HALF_WINDOW = 3
+#: the gaps a turn makes: one step of the closing acceleration anywhere between the records moves the speed's
+#: gap (``kinematic_gaps``) by at most 0.115 of the largest second difference of the speeds it makes at the
+#: record and its neighbours, the range's (``range_gaps``) by 0.127 of it times the spacing (equal spacing
+#: 1–3 s, 0.3 s frames; tests/receive/test_kinematic_check.py); a turn's onset and end are such steps, of
+#: either sign: the gaps within this share of the second difference are not counted
+_TURN_SHARE = 0.15
+#: the same for the speed's gap against the second difference the ranges show (their third differences,
+#: ``_turn_bounds_from_ranges``): at most 0.143 (1 s spacing) to 0.209 (3 s) of it
+_TURN_SHARE_RANGES = 0.25
 
 
 class RecordLookahead:
@@ -1060,13 +1081,25 @@ class RecordLookahead:
       given to the wrong emission: when *every* neighbour (at least two, up to two on each side within
       10 s) puts it beyond 3 combined σ on the same side, its σ covers the smallest gap beyond those 3σ
       (as two estimates of one quantity elsewhere in the receiver). A neighbour that is itself an outlier
-      has a σ that makes it agree, so one bad frame does not condemn the next.
+      has a σ that makes it agree, so one bad frame does not condemn the next;
+    - **the range between its neighbours** (``range_gaps``): the range the two adjacent records' ranges
+      and speeds put at its arrival (exact for a constant jerk; a bias common to them cancels). A gap
+      beyond 3 combined σ that is the largest among its neighbours' is its own error, which its σ covers
+      (a fading tone row 0.44 m off, an echo taken, where each neighbour alone had too wide a σ through its
+      speed's: 15σ → 0.9σ); below that, the gaps of the record and its neighbours less their noise, pooled,
+      count when they stand 3σ out (a range error that changes from frame to frame);
+    - **the speed against the ranges** (``kinematic_gaps``): the range lost between the two adjacent
+      arrivals is the speed's integral, which the three speeds give (Simpson's rule). A phase that wanders
+      from frame to frame (a merged surface image whose own Doppler follows the waves) moves the speeds
+      and not the ranges: the record's own gap beyond 3σ, and the gaps around it pooled, raise its v_r σ
+      (an analytic image swinging ±12 mm/s: speeds 4–21σ off → within 2.2σ).
+      Both use each range's σ of noise (the arrival's own), not its bias terms.
 
     A whole-frame v_r's fading-rate term (``unmodelled_sigmas``, pooled over recent decoded frames) is
     settled the same way, but replaced rather than raised: the pool when the record is released spans it,
     before and after, where the one it took had only earlier frames (and the larger of two noisy pools
     would inflate it); the frame's own rate stays its floor. Only ``sigma_range_m`` (up) and
-    ``sigma_v_r_mps`` change. ``frames=0`` releases each record at once (a live receiver), with none of
+    ``sigma_v_r_mps`` change; the range-between and speed checks read the records as measured, not settled. ``frames=0`` releases each record at once (a live receiver), with none of
     these checks.
 
     Parameters
@@ -1082,6 +1115,8 @@ class RecordLookahead:
         self.frames = int(frames)
         self._held: collections.deque = collections.deque()
         self._released: collections.deque = collections.deque(maxlen=2)
+        # the released records as measured (before their σ's were settled), with their ranges' σ of noise
+        self._measured: collections.deque = collections.deque(maxlen=_KIN_HALF_WINDOW + 1)
 
     def push(self, record: MeasurementRecord) -> list[MeasurementRecord]:
         """Hold ``record`` (just measured) and return those now released, in order."""
@@ -1101,13 +1136,44 @@ class RecordLookahead:
         return out
 
     def _settle(self, record: MeasurementRecord,
-                shape: tuple[float, float, tuple[float, float] | None]) -> MeasurementRecord:
-        used_s, metres_per_s, fade = shape
+                shape: tuple[float, float, tuple[float, float] | None, float]) -> MeasurementRecord:
+        used_s, metres_per_s, fade, noise_s = shape
         meas = self.measurer
         later_s = _K_MERGE * meas.pooled_merge_delay_s
         var = record.sigma_range_m**2 + metres_per_s**2 * max(0.0, later_s**2 - used_s**2)
+        base = var
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
                             sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
+        window, index = self._window(record, metres_per_s * noise_s)
+        outlier = None
+        if window is not None:
+            gaps, nb_var = range_gaps(*window[:5], frame_s=meas.config.frame_duration_s)
+            own = np.array([r.sigma_range_m for r in window[5]])
+            _, nb_full = range_gaps(*window[:3], own, window[4], frame_s=meas.config.frame_duration_s)
+            own = own**2
+            own[index] = base
+            z = np.abs(gaps) / np.sqrt(own + nb_full)
+            # a range whose two neighbours put it beyond 3 combined σ (all of each σ: a neighbour uncertain
+            # for any reason, a frame on decisions, weighs as such) is an error of its own, unless a
+            # neighbour's is the larger (an outlier shows in its neighbours' gaps too, at a half or so): its
+            # σ then covers its gap
+            padded = np.concatenate([[np.nan], z, [np.nan]])
+            with np.errstate(invalid="ignore"):
+                outlier = (z > 3) & ~(padded[:-2] > z) & ~(padded[2:] > z)
+            if outlier[index]:
+                var = max(var, float(gaps[index] ** 2 - nb_full[index]))
+            else:
+                # the ranges' error that changes from frame to frame (a merged echo whose phase the waves
+                # turn, impulses): the gaps of the record and its neighbours, less their noise, pooled (the
+                # outliers' and their neighbours' left out); σ's of noise, as a bias common to neighbours
+                # cancels in them
+                noise2 = np.asarray(window[3]) ** 2
+                spared = gaps.copy()
+                near_out = outlier.copy()
+                near_out[1:] |= outlier[:-1]
+                near_out[:-1] |= outlier[1:]
+                spared[near_out] = np.nan
+                var += gap_excess(spared, noise2 + nb_var, index, own=False)
         changes = {}
         if var > record.sigma_range_m**2:
             changes["sigma_range_m"] = math.sqrt(var)
@@ -1122,10 +1188,37 @@ class RecordLookahead:
             if settled_hz != used_hz:
                 var_v = record.sigma_v_r_mps**2 + to_mps**2 * (settled_hz**2 - used_hz**2)
                 changes["sigma_v_r_mps"] = math.sqrt(max(var_v, 0.0))
+        if window is not None:
+            # the speed against its neighbours' ranges (its own gap, and theirs pooled; not through a range
+            # found an outlier above)
+            gaps, var_g = kinematic_gaps(*window[:5], frame_s=meas.config.frame_duration_s)
+            through = np.zeros(len(gaps), bool)
+            through[1:-1] = outlier[:-2] | outlier[2:]
+            gaps[through] = np.nan
+            extra_v = gap_excess(gaps, var_g, index)
+            if extra_v > 0:
+                var_v = changes.get("sigma_v_r_mps", record.sigma_v_r_mps) ** 2
+                changes["sigma_v_r_mps"] = math.sqrt(var_v + extra_v)
+        self._measured.append((record, metres_per_s * noise_s))
         if changes:
             record = dataclasses.replace(record, **changes)
         self._released.append(record)
         return record
+
+    def _window(self, record: MeasurementRecord, noise_m: float) -> tuple[tuple | None, int]:
+        """The record and its neighbours as measured, up to ``_KIN_HALF_WINDOW`` on each side: (times,
+        ranges, speeds, the ranges' σ of noise (the arrival's own: the fit's or the pilot's; a bias common to
+        neighbouring frames, as a merged echo's, cancels), the speeds' σ, the records) and the record's
+        index; None for a two-way record or fewer than three."""
+        if record.two_way:
+            return None, 0
+        before = [(r, n) for r, n in self._measured if not r.two_way]
+        after = [(held[0], held[1][1] * held[1][3]) for held in list(self._held)[:_KIN_HALF_WINDOW + 1]]
+        window = before + [(record, noise_m)] + [(r, n) for r, n in after if not r.two_way]
+        if len(window) < 3:
+            return None, 0
+        return ([r.t_arrival_s for r, _ in window], [r.range_m for r, _ in window], [r.v_r_mps for r, _ in window],
+                [n for _, n in window], [r.sigma_v_r_mps for r, _ in window], [r for r, _ in window]), len(before)
 
 
 def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord], *,
@@ -1184,3 +1277,242 @@ def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord],
     if not (all(d > 0 for d, _ in gaps) or all(d < 0 for d, _ in gaps)):
         return 0.0
     return min(d * d - 9 * s2 for d, s2 in gaps)
+
+
+def _mean_weights(times_s: np.ndarray, lo_s: float, hi_s: float, frame_s: float) -> tuple[np.ndarray, float]:
+    """Weights w with ∫_lo^hi v dt = w · (v_j) for a quadratic speed v whose mean over [t_j, t_j + D] is v_j,
+    and the same sum's error for v = t³/6 (a unit third derivative) [m per m/s⁴]."""
+    t = np.asarray(times_s, dtype=float)
+    d = float(frame_s)
+    # mean of 1, t, t², t³ over [t_j, t_j + D]
+    means = np.column_stack([np.ones_like(t), t + d / 2, t**2 + t * d + d**2 / 3,
+                             ((t + d) ** 4 - t**4) / (4 * d) if d > 0 else t**3])
+    integ = np.array([hi_s - lo_s, (hi_s**2 - lo_s**2) / 2, (hi_s**3 - lo_s**3) / 3, (hi_s**4 - lo_s**4) / 4])
+    w = np.linalg.solve(means[:, :3].T, integ[:3])
+    return w, abs(float(integ[3] - w @ means[:, 3])) / 6
+
+
+def _turn_bounds(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Per record, the largest |second difference| of the speeds (2·v[t₀, t₁, t₂]·h₀h₁, Δ²v at equal
+    spacing) at it and at its two neighbours (NaN where none), within ``_KIN_MAX_GAP_S``."""
+    n = len(t)
+    d2 = np.full(n, np.nan)
+    for j in range(1, n - 1):
+        h0, h1 = t[j] - t[j - 1], t[j + 1] - t[j]
+        if 0 < h0 <= _KIN_MAX_GAP_S and 0 < h1 <= _KIN_MAX_GAP_S:
+            d2[j] = abs(2 * ((v[j + 1] - v[j]) / h1 - (v[j] - v[j - 1]) / h0) / (h0 + h1) * h0 * h1)
+    padded = np.concatenate([[np.nan], d2, [np.nan]])
+    stack = np.vstack([padded[:-2], padded[1:-1], padded[2:]])
+    out = np.full(n, np.nan)
+    seen = np.any(np.isfinite(stack), axis=0)
+    out[seen] = np.nanmax(stack[:, seen], axis=0)
+    return out
+
+
+def _turn_bounds_from_ranges(t: np.ndarray, r: np.ndarray, sigma_r: np.ndarray) -> np.ndarray:
+    """Per record, the same as ``_turn_bounds`` from the ranges: the second difference of the speed that
+    the ranges' third differences show (6·r[t₀…t₃]·h², h their mean spacing; the motion's, free of the
+    speeds' own errors) beyond 2 of its σ of noise (a turn stands far out of it: 0.26 m/s² at 1 s is
+    0.13 m), the largest over the four-record spans within three records of it."""
+    n = len(t)
+    q = np.full(n, np.nan)  # by the span's first record
+    for i in range(n - 3):
+        tt = t[i : i + 4]
+        if np.all(np.diff(tt) > 0) and tt[-1] - tt[0] <= 3 * _KIN_MAX_GAP_S:
+            coef = np.eye(4)
+            for k in range(1, 4):  # divided differences, of each range's unit vector: the weights on r
+                coef = (coef[1:] - coef[:-1]) / (tt[k:] - tt[:-k])[:, None]
+            scale = 6 * ((tt[-1] - tt[0]) / 3) ** 2
+            value = abs(float(coef[0] @ r[i : i + 4])) * scale
+            noise = math.sqrt(float(np.sum((coef[0] * sigma_r[i : i + 4]) ** 2))) * scale
+            q[i] = max(value - 2 * noise, 0.0)
+    out = np.full(n, np.nan)
+    for j in range(n):
+        near = q[max(j - 3, 0) : j + 1]
+        near = near[np.isfinite(near)]
+        if near.size:
+            out[j] = float(near.max())
+    return out
+
+
+def _beyond(gap: float, bound: float) -> float:
+    """The gap less a bound on its size from the model (towards 0, not across it)."""
+    if not math.isfinite(bound):
+        return gap
+    return math.copysign(max(abs(gap) - bound, 0.0), gap)
+
+
+def kinematic_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, *,
+                   frame_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each record's closing speed against the one its neighbours' ranges and speeds imply (``RecordLookahead``).
+
+    A range and a closing speed are one motion seen twice: the range lost between two arrivals is the speed's
+    integral between them. With three records j − 1, j, j + 1 (arrival times t, ranges r, speeds v, each
+    speed the mean over its frame's reception [t, t + D]),
+    r_{j−1} − r_{j+1} = Σ w_i v_i for a speed quadratic in time (Simpson's rule, w = T/3·(1, 4, 1) at equal
+    spacing T and D → 0; exact here for any spacing and frame), within ``TRACK_SNAP_MPS4`` times the rule's
+    error on a cubic. r_j is not used: a bias common to the ranges (a merged echo, the sound speed) cancels,
+    and what is left is the speeds' error, which the ranges do not share: a phase that wanders with time
+    (a merged surface image whose own Doppler follows the waves: the corpus's far family at 15–20 dB, whole-
+    frame speeds 3–6 mm/s off, alternating with a 4–8 s period, σ 0.5) moves v and not r.
+
+    Parameters
+    ----------
+    times_s, ranges_m, speeds_mps : array_like
+        The records' arrival times [s] (increasing), ranges [m] and closing speeds [m/s].
+    sigma_ranges_m : array_like
+        The ranges' σ of *noise* [m]: a bias common to neighbouring frames cancels and is not counted.
+    sigma_speeds_mps : array_like
+        The speeds' σ [m/s].
+    frame_s : float
+        The frame's duration D [s].
+
+    Returns
+    -------
+    gaps, variances : numpy.ndarray
+        Per record, v_j less the speed the neighbours' ranges and speeds give it [m/s], and that difference's
+        variance under the σ's given [m²/s²]; NaN for the first and last records and where neighbours are
+        further than 4 s away.
+
+    Examples
+    --------
+    A track closing at 1 m/s and slowing by 0.1 m/s²; the third speed 5 mm/s off:
+
+    >>> import numpy as np
+    >>> t = np.arange(5.0)
+    >>> v = 1.0 - 0.1 * (t + 0.15)  # the mean over a 0.3 s frame of 1 − 0.1 t
+    >>> r = 100 - t + 0.05 * t**2
+    >>> v[2] += 0.005
+    >>> g, s2 = kinematic_gaps(t, r, v, np.full(5, 1e-3), np.full(5, 5e-4), frame_s=0.3)
+    >>> np.round(g * 1e3, 2)  # mm/s: the neighbours see a share of it
+    array([ nan, 0.76, 5.  , 1.91,  nan])
+    >>> np.round(np.sqrt(s2[2]) * 1e3, 2)
+    np.float64(1.21)
+    """
+    t = np.asarray(times_s, dtype=float)
+    r = np.asarray(ranges_m, dtype=float)
+    v = np.asarray(speeds_mps, dtype=float)
+    sr = np.asarray(sigma_ranges_m, dtype=float)
+    sv = np.asarray(sigma_speeds_mps, dtype=float)
+    gaps = np.full(len(t), np.nan)
+    var = np.full(len(t), np.nan)
+    # what a turn can make of the gap, bounded from the speeds' second differences and from the ranges' third
+    # differences: a turn shows in both, and the smaller bound holds. Each alone would take in the errors
+    # looked for: a speed error alternating by 5 mm/s makes 10 mm/s of second differences, and the range
+    # bias of the merged image that makes it changes by ±5 mm from frame to frame (corpus, far family)
+    turns = _TURN_SHARE * _turn_bounds(t, v)
+    from_ranges = _TURN_SHARE_RANGES * _turn_bounds_from_ranges(t, r, sr)
+    turns = np.where(np.isfinite(from_ranges), np.fmin(turns, from_ranges), turns)
+    for j in range(1, len(t) - 1):
+        lo, hi = t[j - 1] - t[j], t[j + 1] - t[j]
+        if not (-_KIN_MAX_GAP_S <= lo < 0 < hi <= _KIN_MAX_GAP_S):
+            continue
+        w, cubic = _mean_weights(t[j - 1 : j + 2] - t[j], lo, hi, frame_s)
+        others = (r[j - 1] - r[j + 1]) - w[0] * v[j - 1] - w[2] * v[j + 1]
+        g = _beyond(v[j] - others / w[1], turns[j])
+        s2 = sv[j] ** 2 + (sr[j - 1] ** 2 + sr[j + 1] ** 2 + (w[0] * sv[j - 1]) ** 2 + (w[2] * sv[j + 1]) ** 2
+                           + (TRACK_SNAP_MPS4 * cubic) ** 2) / w[1] ** 2
+        if math.isfinite(g) and math.isfinite(s2):
+            gaps[j], var[j] = g, s2
+    return gaps, var
+
+
+def gap_excess(gaps: np.ndarray, variances: np.ndarray, index: int, *, own: bool = True) -> float:
+    """The variance a record's σ needs for the gaps (``kinematic_gaps``, ``range_gaps``) around it.
+
+    Each gap's square less its variance estimates the unmodelled variance; over the records given (the
+    record's neighbours) but the largest gap, weighted by their precision, it counts when it stands 3 of its σ out of 0 (a
+    gap² is χ²₁ in noise alone: its σ is √2 its variance; neighbouring gaps share records, which √2 more
+    allows for). With ``own``, the record's own gap also counts beyond 3 of its σ alone (a single frame
+    off), as its square less its variance. The larger of the two; 0 without gaps (NaN: not counted).
+    """
+    ok = np.isfinite(gaps) & np.isfinite(variances) & (variances > 0)
+    pool = ok.copy()
+    if np.count_nonzero(pool) >= 4:
+        # the largest gap is left out of the pool: one frame's gap (a turn's start at 3 s spacing, 10–14 mm/s
+        # against 0.6) is its own, counted by its own record; what the pool looks for is shared
+        pool[np.argmax(np.where(ok, gaps**2 / np.where(ok, variances, 1.0), -np.inf))] = False
+    out = 0.0
+    if np.count_nonzero(pool) >= 3:
+        x = gaps[pool] ** 2 - variances[pool]
+        wt = 1.0 / variances[pool] ** 2
+        pooled = float(np.sum(wt * x) / np.sum(wt))
+        if pooled > 3 * 2 * math.sqrt(1.0 / float(np.sum(wt))):
+            out = pooled
+    if own and ok[index] and gaps[index] ** 2 > 9 * variances[index]:
+        out = max(out, float(gaps[index] ** 2 - variances[index]))
+    return out
+
+
+def range_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, *,
+               frame_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each record's range against the one its two neighbours' ranges and speeds put at its arrival.
+
+    The range r(t) cubic through the neighbours' ranges r_{j±1}, whose mean closing speeds over their frames
+    [t, t + D] are v_{j±1} (Hermite interpolation: exact for a constant jerk), evaluated at t_j; within
+    ``TRACK_SNAP_MPS4`` times the rule's error on a quartic. The neighbours' weights on their ranges sum to
+    1, so a bias common to them cancels: what is left is the record's own error (an echo taken for a faded
+    direct path, 0.4 m behind: 15σ on the corpus's fading family where each neighbour alone, through its
+    speed's σ of 8–18 cm/s over 1–2 s, could not show it).
+
+    Parameters
+    ----------
+    times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, frame_s
+        As :func:`kinematic_gaps`.
+
+    Returns
+    -------
+    gaps, variances : numpy.ndarray
+        Per record, r_j less the neighbours' range at its arrival [m], and that range's variance under the
+        neighbours' σ's (the record's own not in it) [m²]; NaN for the first and last records and where
+        neighbours are further than 4 s away.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(5.0)
+    >>> r = 100 - t + 0.05 * t**2
+    >>> v = 1.0 - 0.1 * (t + 0.15)  # the mean of −r′ over a 0.3 s frame
+    >>> r[2] += 0.4  # an echo 0.4 m behind taken at the third arrival
+    >>> g, s2 = range_gaps(t, r, v, np.full(5, 0.002), np.full(5, 0.1), frame_s=0.3)
+    >>> np.round(g, 3)  # the neighbours see it through the interpolation's weights
+    array([   nan, -0.154,  0.4  , -0.246,    nan])
+    >>> round(float(np.sqrt(s2[2])), 3)  # mostly the speeds' (weights ≈ ±D/4... T/4 on them)
+    0.041
+    """
+    t = np.asarray(times_s, dtype=float)
+    r = np.asarray(ranges_m, dtype=float)
+    v = np.asarray(speeds_mps, dtype=float)
+    sr = np.asarray(sigma_ranges_m, dtype=float)
+    sv = np.asarray(sigma_speeds_mps, dtype=float)
+    d = float(frame_s)
+    gaps = np.full(len(t), np.nan)
+    var = np.full(len(t), np.nan)
+
+    def rows(x: float) -> tuple[np.ndarray, np.ndarray]:
+        # r(x) and the mean of −r' over [x, x + D], on the powers t⁰…t⁴ (the last for the rule's error)
+        p = np.arange(5)
+        val = x**p
+        if d > 0:
+            mean = -((x + d) ** p - x**p) / d
+        else:
+            mean = -p * np.where(p > 0, x ** np.maximum(p - 1, 0), 0.0)
+        return val, mean
+
+    turns = _turn_bounds(t, v)
+    for j in range(1, len(t) - 1):
+        lo, hi = t[j - 1] - t[j], t[j + 1] - t[j]
+        if not (-_KIN_MAX_GAP_S <= lo < 0 < hi <= _KIN_MAX_GAP_S):
+            continue
+        (r_lo, v_lo), (r_hi, v_hi) = rows(lo), rows(hi)
+        m = np.array([r_lo, r_hi, v_lo, v_hi])
+        # weights u on (r_{j−1}, r_{j+1}, v_{j−1}, v_{j+1}) giving the cubic's value at t_j (its constant term)
+        u = np.linalg.solve(m[:, :4].T, np.eye(4)[0])
+        quartic = abs(float(u @ m[:, 4])) / 24  # the rule's value at 0 (the truth 0) for r = t⁴/24
+        est = u @ np.array([r[j - 1], r[j + 1], v[j - 1], v[j + 1]])
+        s2 = ((u[0] * sr[j - 1]) ** 2 + (u[1] * sr[j + 1]) ** 2 + (u[2] * sv[j - 1]) ** 2 + (u[3] * sv[j + 1]) ** 2
+              + (TRACK_SNAP_MPS4 * quartic) ** 2)
+        g = _beyond(r[j] - est, _TURN_SHARE * turns[j] * (hi - lo) / 2)
+        if math.isfinite(g) and math.isfinite(s2):
+            gaps[j], var[j] = g, s2
+    return gaps, var
