@@ -1160,20 +1160,23 @@ class RecordLookahead:
             padded = np.concatenate([[np.nan], z, [np.nan]])
             with np.errstate(invalid="ignore"):
                 outlier = (z > 3) & ~(padded[:-2] > z) & ~(padded[2:] > z)
+            # the ranges' error that changes from frame to frame (a merged echo whose phase the waves turn,
+            # impulses): the gaps of the record and its neighbours, less their noise, pooled (the outliers'
+            # and their neighbours' left out); σ's of noise, as a bias common to neighbours cancels in them
+            noise2 = np.asarray(window[3]) ** 2
+            spared = gaps.copy()
+            near_out = outlier.copy()
+            near_out[1:] |= outlier[:-1]
+            near_out[:-1] |= outlier[1:]
+            spared[near_out] = np.nan
+            wander = gap_excess(spared, noise2 + nb_var, index, own=False)
+            # as noise to the speed's check, any of it: a wander that stands out in some windows and not in the
+            # next would flicker the speeds' σ's (a far recording, its range bias moving by ±10 mm)
+            wander_any = gap_excess(spared, noise2 + nb_var, index, own=False, k=0.0)
             if outlier[index]:
                 var = max(var, float(gaps[index] ** 2 - nb_full[index]))
             else:
-                # the ranges' error that changes from frame to frame (a merged echo whose phase the waves
-                # turn, impulses): the gaps of the record and its neighbours, less their noise, pooled (the
-                # outliers' and their neighbours' left out); σ's of noise, as a bias common to neighbours
-                # cancels in them
-                noise2 = np.asarray(window[3]) ** 2
-                spared = gaps.copy()
-                near_out = outlier.copy()
-                near_out[1:] |= outlier[:-1]
-                near_out[:-1] |= outlier[1:]
-                spared[near_out] = np.nan
-                var += gap_excess(spared, noise2 + nb_var, index, own=False)
+                var += wander
         changes = {}
         if var > record.sigma_range_m**2:
             changes["sigma_range_m"] = math.sqrt(var)
@@ -1191,7 +1194,12 @@ class RecordLookahead:
         if window is not None:
             # the speed against its neighbours' ranges (its own gap, and theirs pooled; not through a range
             # found an outlier above)
-            gaps, var_g = kinematic_gaps(*window[:5], frame_s=meas.config.frame_duration_s)
+            # the ranges' wander is noise to it: a range gap is the record's error less ~½ of each
+            # neighbour's (1.5 of a frame's variance at equal spacing), which a merged image's bias moving
+            # by ±5 mm from frame to frame would otherwise put on the speeds (corpus, far family)
+            noise_r = np.sqrt(np.asarray(window[3]) ** 2 + wander_any / 1.5)
+            gaps, var_g = kinematic_gaps(window[0], window[1], window[2], noise_r, window[4],
+                                         frame_s=meas.config.frame_duration_s)
             through = np.zeros(len(gaps), bool)
             through[1:-1] = outlier[:-2] | outlier[2:]
             gaps[through] = np.nan
@@ -1417,14 +1425,16 @@ def kinematic_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_m
     return gaps, var
 
 
-def gap_excess(gaps: np.ndarray, variances: np.ndarray, index: int, *, own: bool = True) -> float:
+def gap_excess(gaps: np.ndarray, variances: np.ndarray, index: int, *, own: bool = True,
+               k: float = 3.0) -> float:
     """The variance a record's σ needs for the gaps (``kinematic_gaps``, ``range_gaps``) around it.
 
     Each gap's square less its variance estimates the unmodelled variance; over the records given (the
-    record's neighbours) but the largest gap, weighted by their precision, it counts when it stands 3 of its σ out of 0 (a
-    gap² is χ²₁ in noise alone: its σ is √2 its variance; neighbouring gaps share records, which √2 more
-    allows for). With ``own``, the record's own gap also counts beyond 3 of its σ alone (a single frame
-    off), as its square less its variance. The larger of the two; 0 without gaps (NaN: not counted).
+    record's neighbours) but the largest gap, weighted by their precision, it counts when it stands ``k`` of
+    its σ out of 0 (a gap² is χ²₁ in noise alone: its σ is √2 its variance; neighbouring gaps share records,
+    which √2 more allows for). With ``own``, the record's own gap also counts beyond 3 of its σ alone (a
+    single frame off), as its square less its variance. The larger of the two; 0 without gaps (NaN: not
+    counted).
     """
     ok = np.isfinite(gaps) & np.isfinite(variances) & (variances > 0)
     pool = ok.copy()
@@ -1437,7 +1447,7 @@ def gap_excess(gaps: np.ndarray, variances: np.ndarray, index: int, *, own: bool
         x = gaps[pool] ** 2 - variances[pool]
         wt = 1.0 / variances[pool] ** 2
         pooled = float(np.sum(wt * x) / np.sum(wt))
-        if pooled > 3 * 2 * math.sqrt(1.0 / float(np.sum(wt))):
+        if pooled > k * 2 * math.sqrt(1.0 / float(np.sum(wt))):
             out = pooled
     if own and ok[index] and gaps[index] ** 2 > 9 * variances[index]:
         out = max(out, float(gaps[index] ** 2 - variances[index]))
