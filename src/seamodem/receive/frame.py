@@ -1172,7 +1172,7 @@ class RecordLookahead:
             wander = gap_excess(spared, noise2 + nb_var, index, own=False)
             # as noise to the speed's check, any of it: a wander that stands out in some windows and not in the
             # next would flicker the speeds' σ's (a far recording, its range bias moving by ±10 mm)
-            wander_any = gap_excess(spared, noise2 + nb_var, index, own=False, k=0.0)
+            wander_any = gap_excess(spared, noise2 + nb_var, index, own=False, k=0.0, trim=False)
             if outlier[index]:
                 var = max(var, float(gaps[index] ** 2 - nb_full[index]))
             else:
@@ -1426,19 +1426,20 @@ def kinematic_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_m
 
 
 def gap_excess(gaps: np.ndarray, variances: np.ndarray, index: int, *, own: bool = True,
-               k: float = 3.0) -> float:
+               k: float = 3.0, trim: bool = True) -> float:
     """The variance a record's σ needs for the gaps (``kinematic_gaps``, ``range_gaps``) around it.
 
     Each gap's square less its variance estimates the unmodelled variance; over the records given (the
-    record's neighbours) but the largest gap, weighted by their precision, it counts when it stands ``k`` of
+    record's neighbours) but the largest gap (with ``trim``), weighted by their precision, it counts when it stands ``k`` of
     its σ out of 0 (a gap² is χ²₁ in noise alone: its σ is √2 its variance; neighbouring gaps share records,
-    which √2 more allows for). With ``own``, the record's own gap also counts beyond 3 of its σ alone (a
-    single frame off), as its square less its variance. The larger of the two; 0 without gaps (NaN: not
-    counted).
+    which √2 more allows for). With ``own``, the record's own gap beyond 3 of its σ then counts too, as its
+    square less its variance, the larger of the two (alone, a gap is as often the ranges' wander beyond
+    the σ's given: a far recording's merged image moving its range bias by ±10 mm a frame). 0 without
+    gaps (NaN: not counted).
     """
     ok = np.isfinite(gaps) & np.isfinite(variances) & (variances > 0)
     pool = ok.copy()
-    if np.count_nonzero(pool) >= 4:
+    if trim and np.count_nonzero(pool) >= 4:
         # the largest gap is left out of the pool: one frame's gap (a turn's start at 3 s spacing, 10–14 mm/s
         # against 0.6) is its own, counted by its own record; what the pool looks for is shared
         pool[np.argmax(np.where(ok, gaps**2 / np.where(ok, variances, 1.0), -np.inf))] = False
@@ -1449,7 +1450,7 @@ def gap_excess(gaps: np.ndarray, variances: np.ndarray, index: int, *, own: bool
         pooled = float(np.sum(wt * x) / np.sum(wt))
         if pooled > k * 2 * math.sqrt(1.0 / float(np.sum(wt))):
             out = pooled
-    if own and ok[index] and gaps[index] ** 2 > 9 * variances[index]:
+    if own and out > 0 and ok[index] and gaps[index] ** 2 > 9 * variances[index]:
         out = max(out, float(gaps[index] ** 2 - variances[index]))
     return out
 
