@@ -1091,7 +1091,7 @@ class RecordLookahead:
     - **the speed against the ranges** (``kinematic_gaps``): the range lost between the two adjacent
       arrivals is the speed's integral, which the three speeds give (Simpson's rule). A phase that wanders
       from frame to frame (a merged surface image whose own Doppler follows the waves) moves the speeds
-      and not the ranges: the record's own gap beyond 3σ, and the gaps around it pooled, raise its v_r σ
+      and not the ranges: the gaps around it pooled, when they stand out, and then its own, raise its v_r σ
       (an analytic image swinging ±12 mm/s: speeds 4–21σ off → within 2.2σ).
       Both use each range's σ of noise (the arrival's own), not its bias terms.
 
