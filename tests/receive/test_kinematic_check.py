@@ -242,3 +242,19 @@ def test_a_range_bias_that_wanders_is_not_put_on_the_speeds():
     err = speeds_off - v_true
     z = np.array([abs(e) / r.sigma_v_r_mps for e, r in zip(err, out)])
     assert np.mean(z <= 3) >= 0.9, np.round(z, 1)
+
+
+@pytest.mark.parametrize("last", [True, False])
+def test_an_echo_taken_next_to_the_recordings_end_is_put_on_the_right_record(last):
+    # the last record (no gap of its own) or the one before it takes an echo 15 m behind: the one that did
+    # covers it, the other keeps its σ (before, the last one's error was put on the one before it)
+    n = 10
+    t_emit = 0.1 + np.arange(n)
+    v_true = 0.9 / (1 - 0.9 / C)
+    ranges = 700 - 0.9 * t_emit + 1e-3 * np.random.default_rng(3).standard_normal(n)
+    off = n - 1 if last else n - 2
+    ranges[off] += 15.0
+    out = _lookahead_run(ranges, np.full(n, v_true), sigma_r_noise=1e-3, sigma_r=1e-3, sigma_v=5e-4)
+    other = n - 2 if last else n - 1
+    assert out[off].sigma_range_m > 5.0, [r.sigma_range_m for r in out]
+    assert out[other].sigma_range_m < 0.01, [r.sigma_range_m for r in out]

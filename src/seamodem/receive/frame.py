@@ -1145,7 +1145,6 @@ class RecordLookahead:
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
                             sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
         window, index = self._window(record, metres_per_s * noise_s)
-        outlier = None
         if window is not None:
             gaps, nb_var = range_gaps(*window[:5], frame_s=meas.config.frame_duration_s)
             own = np.array([r.sigma_range_m for r in window[5]])
@@ -1155,25 +1154,36 @@ class RecordLookahead:
             z = np.abs(gaps) / np.sqrt(own + nb_full)
             # a range whose two neighbours put it beyond 3 combined σ (all of each σ: a neighbour uncertain
             # for any reason, a frame on decisions, weighs as such) is an error of its own, unless a
-            # neighbour's is the larger (an outlier shows in its neighbours' gaps too, at a half or so): its
-            # σ then covers its gap
-            padded = np.concatenate([[np.nan], z, [np.nan]])
+            # neighbour's is the larger (an outlier shows in its neighbours' gaps too, at a half or so). A
+            # neighbour with no gap of its own (a recording's last record) is the outlier when the one-sided
+            # track check finds it so (the last record 15 m off had put its σ on the one before it)
             with np.errstate(invalid="ignore"):
-                outlier = (z > 3) & ~(padded[:-2] > z) & ~(padded[2:] > z)
+                suspect = z > 3
+            outlier = bool(suspect[index])
+            for i in (index - 1, index + 1):
+                if not (outlier and 0 <= i < len(z)):
+                    continue
+                zi = z[i]
+                if not math.isfinite(zi):
+                    others = [r for j, r in enumerate(window[5]) if j != i]
+                    zi = math.inf if track_gap_m2(window[5][i], others, sigma_range_m=window[5][i].sigma_range_m,
+                                                  half_frame_s=meas.config.frame_duration_s / 2) > 0 else 0.0
+                outlier = zi <= z[index]
+            # a gap beyond 3σ says one of its three ranges is off: the gaps that read them are set aside
+            near = suspect.copy()
+            near[1:] |= suspect[:-1]
+            near[:-1] |= suspect[1:]
             # the ranges' error that changes from frame to frame (a merged echo whose phase the waves turn,
-            # impulses): the gaps of the record and its neighbours, less their noise, pooled (the outliers'
-            # and their neighbours' left out); σ's of noise, as a bias common to neighbours cancels in them
+            # impulses): the gaps of the record and its neighbours, less their noise, pooled (those set
+            # aside left out); σ's of noise, as a bias common to neighbours cancels in them
             noise2 = np.asarray(window[3]) ** 2
             spared = gaps.copy()
-            near_out = outlier.copy()
-            near_out[1:] |= outlier[:-1]
-            near_out[:-1] |= outlier[1:]
-            spared[near_out] = np.nan
+            spared[near] = np.nan
             wander = gap_excess(spared, noise2 + nb_var, index, own=False)
             # as noise to the speed's check, any of it: a wander that stands out in some windows and not in the
             # next would flicker the speeds' σ's (a far recording, its range bias moving by ±10 mm)
             wander_any = gap_excess(spared, noise2 + nb_var, index, own=False, k=0.0, trim=False)
-            if outlier[index]:
+            if outlier:
                 var = max(var, float(gaps[index] ** 2 - nb_full[index]))
             else:
                 var += wander
@@ -1193,16 +1203,14 @@ class RecordLookahead:
                 changes["sigma_v_r_mps"] = math.sqrt(max(var_v, 0.0))
         if window is not None:
             # the speed against its neighbours' ranges (its own gap, and theirs pooled; not through a range
-            # found an outlier above)
+            # set aside above)
             # the ranges' wander is noise to it: a range gap is the record's error less ~½ of each
             # neighbour's (1.5 of a frame's variance at equal spacing), which a merged image's bias moving
             # by ±5 mm from frame to frame would otherwise put on the speeds (corpus, far family)
             noise_r = np.sqrt(np.asarray(window[3]) ** 2 + wander_any / 1.5)
             gaps, var_g = kinematic_gaps(window[0], window[1], window[2], noise_r, window[4],
                                          frame_s=meas.config.frame_duration_s)
-            through = np.zeros(len(gaps), bool)
-            through[1:-1] = outlier[:-2] | outlier[2:]
-            gaps[through] = np.nan
+            gaps[near] = np.nan
             extra_v = gap_excess(gaps, var_g, index)
             if extra_v > 0:
                 var_v = changes.get("sigma_v_r_mps", record.sigma_v_r_mps) ** 2
