@@ -22,6 +22,7 @@ import collections
 import dataclasses
 import math
 import warnings
+from typing import NamedTuple
 from collections.abc import Callable
 
 import numpy as np
@@ -1064,6 +1065,21 @@ _TURN_SHARE = 0.15
 _TURN_SHARE_RANGES = 0.25
 
 
+class _Neighbours(NamedTuple):
+    """A record and its neighbours as measured (``RecordLookahead._window``), in arrival order."""
+
+    times_s: list
+    ranges_m: list
+    speeds_mps: list
+    #: the ranges' σ of noise (the arrival's own: the fit's or the pilot's; a bias common to neighbouring
+    #: frames, as a merged echo's, cancels in their gaps)
+    noise_m: list
+    sigma_speeds_mps: list
+    records: list
+    #: the record's place among them
+    index: int
+
+
 class RecordLookahead:
     """Records held back until later frames have been measured (``ReceiverSettings.lookahead_frames``).
 
@@ -1086,7 +1102,7 @@ class RecordLookahead:
       and speeds put at its arrival (exact for a constant jerk; a bias common to them cancels). A gap
       beyond 3 combined σ that is the largest among its neighbours' is its own error, which its σ covers
       (a fading tone row 0.44 m off, an echo taken, where each neighbour alone had too wide a σ through its
-      speed's: 15σ → 0.9σ); below that, the gaps of the record and its neighbours less their noise, pooled,
+      speed's: 15σ → 1.0σ); below that, the gaps of the record and its neighbours less their noise, pooled,
       count when they stand 3σ out (a range error that changes from frame to frame);
     - **the speed against the ranges** (``kinematic_gaps``): the range lost between the two adjacent
       arrivals is the speed's integral, which the three speeds give (Simpson's rule). A phase that wanders
@@ -1099,8 +1115,8 @@ class RecordLookahead:
     settled the same way, but replaced rather than raised: the pool when the record is released spans it,
     before and after, where the one it took had only earlier frames (and the larger of two noisy pools
     would inflate it); the frame's own rate stays its floor. Only ``sigma_range_m`` (up) and
-    ``sigma_v_r_mps`` change; the range-between and speed checks read the records as measured, not settled. ``frames=0`` releases each record at once (a live receiver), with none of
-    these checks.
+    ``sigma_v_r_mps`` change; the range-between and speed checks read the records as measured, not
+    settled. ``frames=0`` releases each record at once (a live receiver), with none of these checks.
 
     Parameters
     ----------
@@ -1144,12 +1160,13 @@ class RecordLookahead:
         base = var
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
                             sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
-        window, index = self._window(record, metres_per_s * noise_s)
-        if window is not None:
-            gaps, nb_var = range_gaps(*window[:5], frame_s=meas.config.frame_duration_s)
-            own = np.array([r.sigma_range_m for r in window[5]])
-            _, nb_full = range_gaps(*window[:3], own, window[4], frame_s=meas.config.frame_duration_s)
-            own = own**2
+        nb = self._window(record, metres_per_s * noise_s)
+        if nb is not None:
+            index = nb.index
+            whole = np.array([r.sigma_range_m for r in nb.records])
+            gaps, (nb_var, nb_full) = range_gaps(nb.times_s, nb.ranges_m, nb.speeds_mps, [nb.noise_m, whole],
+                                                 nb.sigma_speeds_mps, frame_s=meas.config.frame_duration_s)
+            own = whole**2
             own[index] = base
             z = np.abs(gaps) / np.sqrt(own + nb_full)
             # a range whose two neighbours put it beyond 3 combined σ (all of each σ: a neighbour uncertain
@@ -1165,8 +1182,8 @@ class RecordLookahead:
                     continue
                 zi = z[i]
                 if not math.isfinite(zi):
-                    others = [r for j, r in enumerate(window[5]) if j != i]
-                    zi = math.inf if track_gap_m2(window[5][i], others, sigma_range_m=window[5][i].sigma_range_m,
+                    others = [r for j, r in enumerate(nb.records) if j != i]
+                    zi = math.inf if track_gap_m2(nb.records[i], others, sigma_range_m=nb.records[i].sigma_range_m,
                                                   half_frame_s=meas.config.frame_duration_s / 2) > 0 else 0.0
                 outlier = zi <= z[index]
             # a gap beyond 3σ says one of its three ranges is off: the gaps that read them are set aside
@@ -1176,13 +1193,13 @@ class RecordLookahead:
             # the ranges' error that changes from frame to frame (a merged echo whose phase the waves turn,
             # impulses): the gaps of the record and its neighbours, less their noise, pooled (those set
             # aside left out); σ's of noise, as a bias common to neighbours cancels in them
-            noise2 = np.asarray(window[3]) ** 2
             spared = gaps.copy()
             spared[near] = np.nan
-            wander = gap_excess(spared, noise2 + nb_var, index, own=False)
+            gap_var = np.asarray(nb.noise_m) ** 2 + nb_var
+            wander = gap_excess(spared, gap_var, index, own=False)
             # as noise to the speed's check, any of it: a wander that stands out in some windows and not in the
             # next would flicker the speeds' σ's (a far recording, its range bias moving by ±10 mm)
-            wander_any = gap_excess(spared, noise2 + nb_var, index, own=False, k=0.0, trim=False)
+            wander_any = gap_excess(spared, gap_var, index, own=False, k=0.0, trim=False)
             if outlier:
                 var = max(var, float(gaps[index] ** 2 - nb_full[index]))
             else:
@@ -1201,17 +1218,17 @@ class RecordLookahead:
             if settled_hz != used_hz:
                 var_v = record.sigma_v_r_mps**2 + to_mps**2 * (settled_hz**2 - used_hz**2)
                 changes["sigma_v_r_mps"] = math.sqrt(max(var_v, 0.0))
-        if window is not None:
+        if nb is not None:
             # the speed against its neighbours' ranges (its own gap, and theirs pooled; not through a range
             # set aside above)
             # the ranges' wander is noise to it: a range gap is the record's error less ~½ of each
             # neighbour's (1.5 of a frame's variance at equal spacing), which a merged image's bias moving
             # by ±5 mm from frame to frame would otherwise put on the speeds (corpus, far family)
-            noise_r = np.sqrt(np.asarray(window[3]) ** 2 + wander_any / 1.5)
-            gaps, var_g = kinematic_gaps(window[0], window[1], window[2], noise_r, window[4],
+            noise_r = np.sqrt(np.asarray(nb.noise_m) ** 2 + wander_any / 1.5)
+            gaps, var_g = kinematic_gaps(nb.times_s, nb.ranges_m, nb.speeds_mps, noise_r, nb.sigma_speeds_mps,
                                          frame_s=meas.config.frame_duration_s)
             gaps[near] = np.nan
-            extra_v = gap_excess(gaps, var_g, index)
+            extra_v = gap_excess(gaps, var_g, nb.index)
             if extra_v > 0:
                 var_v = changes.get("sigma_v_r_mps", record.sigma_v_r_mps) ** 2
                 changes["sigma_v_r_mps"] = math.sqrt(var_v + extra_v)
@@ -1221,20 +1238,19 @@ class RecordLookahead:
         self._released.append(record)
         return record
 
-    def _window(self, record: MeasurementRecord, noise_m: float) -> tuple[tuple | None, int]:
-        """The record and its neighbours as measured, up to ``_KIN_HALF_WINDOW`` on each side: (times,
-        ranges, speeds, the ranges' σ of noise (the arrival's own: the fit's or the pilot's; a bias common to
-        neighbouring frames, as a merged echo's, cancels), the speeds' σ, the records) and the record's
-        index; None for a two-way record or fewer than three."""
+    def _window(self, record: MeasurementRecord, noise_m: float) -> _Neighbours | None:
+        """The record (its range's σ of noise ``noise_m``) and its neighbours as measured, up to
+        ``_KIN_HALF_WINDOW`` on each side; None for a two-way record or fewer than three."""
         if record.two_way:
-            return None, 0
+            return None
         before = [(r, n) for r, n in self._measured if not r.two_way]
         after = [(held[0], held[1][1] * held[1][3]) for held in list(self._held)[:_KIN_HALF_WINDOW + 1]]
         window = before + [(record, noise_m)] + [(r, n) for r, n in after if not r.two_way]
         if len(window) < 3:
-            return None, 0
-        return ([r.t_arrival_s for r, _ in window], [r.range_m for r, _ in window], [r.v_r_mps for r, _ in window],
-                [n for _, n in window], [r.sigma_v_r_mps for r, _ in window], [r for r, _ in window]), len(before)
+            return None
+        return _Neighbours([r.t_arrival_s for r, _ in window], [r.range_m for r, _ in window],
+                           [r.v_r_mps for r, _ in window], [n for _, n in window],
+                           [r.sigma_v_r_mps for r, _ in window], [r for r, _ in window], len(before))
 
 
 def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord], *,
@@ -1476,15 +1492,19 @@ def range_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, 
 
     Parameters
     ----------
-    times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, frame_s
+    times_s, ranges_m, speeds_mps, sigma_speeds_mps, frame_s
         As :func:`kinematic_gaps`.
+    sigma_ranges_m : array_like, shape (n,) or (m, n)
+        The ranges' σ [m]; m sets of them give m rows of variances from the one interpolation (the receiver
+        reads the ranges' σ of noise and their whole σ).
 
     Returns
     -------
     gaps, variances : numpy.ndarray
-        Per record, r_j less the neighbours' range at its arrival [m], and that range's variance under the
-        neighbours' σ's (the record's own not in it) [m²]; NaN for the first and last records and where
-        neighbours are further than 4 s away.
+        Per record, r_j less the neighbours' range at its arrival [m] (where the first set's variance is
+        finite), and that range's variance under the neighbours' σ's (the record's own not in it) [m²],
+        shaped as ``sigma_ranges_m``; NaN for the first and last records and where neighbours are further
+        than 4 s away.
 
     Examples
     --------
@@ -1503,10 +1523,11 @@ def range_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, 
     r = np.asarray(ranges_m, dtype=float)
     v = np.asarray(speeds_mps, dtype=float)
     sr = np.asarray(sigma_ranges_m, dtype=float)
+    sets = np.atleast_2d(sr)
     sv = np.asarray(sigma_speeds_mps, dtype=float)
     d = float(frame_s)
     gaps = np.full(len(t), np.nan)
-    var = np.full(len(t), np.nan)
+    var = np.full((len(sets), len(t)), np.nan)
 
     def rows(x: float) -> tuple[np.ndarray, np.ndarray]:
         # r(x) and the mean of −r' over [x, x + D], on the powers t⁰…t⁴ (the last for the rule's error)
@@ -1529,9 +1550,11 @@ def range_gaps(times_s, ranges_m, speeds_mps, sigma_ranges_m, sigma_speeds_mps, 
         u = np.linalg.solve(m[:, :4].T, np.eye(4)[0])
         quartic = abs(float(u @ m[:, 4])) / 24  # the rule's value at 0 (the truth 0) for r = t⁴/24
         est = u @ np.array([r[j - 1], r[j + 1], v[j - 1], v[j + 1]])
-        s2 = ((u[0] * sr[j - 1]) ** 2 + (u[1] * sr[j + 1]) ** 2 + (u[2] * sv[j - 1]) ** 2 + (u[3] * sv[j + 1]) ** 2
-              + (TRACK_SNAP_MPS4 * quartic) ** 2)
+        s2 = ((u[0] * sets[:, j - 1]) ** 2 + (u[1] * sets[:, j + 1]) ** 2 + (u[2] * sv[j - 1]) ** 2
+              + (u[3] * sv[j + 1]) ** 2 + (TRACK_SNAP_MPS4 * quartic) ** 2)
         g = _beyond(r[j] - est, _TURN_SHARE * turns[j] * (hi - lo) / 2)
-        if math.isfinite(g) and math.isfinite(s2):
-            gaps[j], var[j] = g, s2
-    return gaps, var
+        if math.isfinite(g):
+            var[:, j] = np.where(np.isfinite(s2), s2, np.nan)
+            if math.isfinite(s2[0]):
+                gaps[j] = g
+    return gaps, (var if sr.ndim > 1 else var[0])
