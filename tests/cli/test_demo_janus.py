@@ -122,7 +122,8 @@ def test_frame_demo_writes_what_it_wrote_before_the_waveform_option(tmp_path):
     tracks equal to 1e-12), and in session 12 for the bank's echo term and the look-ahead (sigma_v_r_bank_mps
     ≤ 0.30 relative, sigma_v_r_mps ≤ 9e-4; the tracks equal to 1e-9), and in session 13 for the amplitude
     rate's parabola counted beyond 3σ and the rate pool's threshold (sigma_v_r_mps ≤ 9.3e-4 relative,
-    sigma_range_m ≤ 1e-5; the tracks equal to 1e-9). Rewrite them
+    sigma_range_m ≤ 1e-5; the tracks equal to 1e-9), and in session 15 for the paths' joint delay σ
+    (sigma_range_m ≤ 9e-5 relative; the tracks equal to 1e-9). Rewrite them
     (``seamodem demo --duration 6 --no-plots -q -o DIR``) only for a change that is meant to alter them."""
     out = tmp_path / "demo"
     assert main(["demo", "--duration", "6", "--no-plots", "-q", "-o", str(out)]) == 0
