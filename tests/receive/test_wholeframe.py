@@ -112,6 +112,26 @@ def test_clicks_at_known_positions_do_not_move_the_estimate_beyond_its_sigma():
     assert raw.sigma_v_mps[0] > 1.5 * fit.sigma_v_mps[0]
 
 
+
+def test_pilot_noise_excess_sees_impulses_on_the_pilot_only():
+    # white noise: the pilot's outputs' mean over their median-implied power is 1 within its scatter
+    x, ta = _received(11, 12.0)
+    assert 1.0 <= _fit(x, ta).pilot_noise_excess < 1.3
+    # clicks 20 dB above the noise on the pilot's 23 ms only (none in the data after it): its outputs'
+    # noise is heavy-tailed, the rest of the frame's is not
+    rng = np.random.default_rng(3)
+    sigma = awgn_sigma(CFG, 12.0)
+    xc = x.copy()
+    n = np.arange(40)
+    pilot_span = CFG.n_pilot * CFG.symbol_period_s
+    for k in rng.integers(int((ta + 0.002) * FS), int((ta + pilot_span) * FS), 8):
+        xc[k : k + 40] += 10 * sigma * np.exp(-n / 10) * np.cos(2 * np.pi * 0.3 * n + rng.uniform(0, 6.3))
+    assert _fit(xc, ta).pilot_noise_excess > 1.5
+    late = x.copy()
+    for k in rng.integers(int((ta + 0.1) * FS), int((ta + 0.25) * FS), 8):
+        late[k : k + 40] += 10 * sigma * np.exp(-n / 10) * np.cos(2 * np.pi * 0.3 * n + rng.uniform(0, 6.3))
+    assert _fit(late, ta).pilot_noise_excess < 1.3
+
 def test_blanker_zeroes_an_impulse_and_its_stretch_only():
     x = np.random.default_rng(0).standard_normal(20_000)
     x[5000] = 80.0

@@ -811,6 +811,12 @@ class FrameMeasurer:
             range_hint /= 2
         doppler, timing = self._doppler(m, dec, bb, t0_s, fs, excess, snr_direct_db, range_hint)
         sigma_bank = doppler.pop("sigma_bank")
+        # impulses left where the pilot lies, as a fit's residual there shows them (the noise windows
+        # around the frame may miss them: a pilot 16 mm off with σ 3.1 mm, its outputs' excess 1.5, the
+        # windows' 1.0)
+        pilot_excess = doppler.pop("pilot_excess", 1.0)
+        if pilot_excess > excess:
+            sigma_tau *= math.sqrt(pilot_excess / excess)
         # the pilot's arrival: its CRLB and the pull of the echoes it did not model (the fit's, where one was made)
         sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_pilot_pull"))
         noise_tau = sigma_tau  # the arrival's σ of noise, frame to frame (RecordLookahead's kinematic check)
@@ -959,6 +965,7 @@ class FrameMeasurer:
         shown = fit if fit is not None else (rejected[2] if rejected is not None else None)
         pilot_pull = 0.0 if shown is None else pilot_sidelobe_sigma_s(
             shown[0], shown[1], m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
+        pilot_excess = 1.0 if shown is None else float(shown[0].pilot_noise_excess)
         sigma_tau_rejected = 0.0
         if rejected is not None:
             sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c,
@@ -999,6 +1006,7 @@ class FrameMeasurer:
             shape = channel_shape_delay_s(wf, first, pooled_merge)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, sigma_tau_pilot_pull=pilot_pull,
+                        pilot_excess=pilot_excess,
                         v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
@@ -1009,11 +1017,11 @@ class FrameMeasurer:
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank,
-                        sigma_tau_pilot_pull=pilot_pull, v_r_source="bank",
+                        sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s),
                         sigma_tau_unmodelled=sigma_tau_unmodelled), None
         return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank,
-                    sigma_tau_pilot_pull=pilot_pull, v_r_source="tone",
+                    sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
                     n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_unmodelled), None
 

@@ -116,6 +116,9 @@ class WholeFrameFit:
         what the timing CRLB gives it [s] (a diagnostic: the segments' timing
         estimator is not efficient, so noise alone leaves 2–4 mm of it at
         12 dB; the fit's ``sigma_delay_s`` already carries the scatter).
+    pilot_noise_excess : float
+        Mean over median-implied power (× ln 2; ≥ 1, 1 for Gaussian noise) of the residual's matched-filter
+        outputs at the pilot's symbols: the impulses left where the pilot lies, which the pilot's arrival sees.
     """
 
     delays_s: np.ndarray
@@ -133,6 +136,7 @@ class WholeFrameFit:
     curvature_s2: np.ndarray | None = None
     curvature_noise_s4: np.ndarray | None = None
     delay_scatter_s: np.ndarray | None = None
+    pilot_noise_excess: float = 1.0
 
 
 def known_signal_velocity_crlb_mps(config: FrameConfig, es_n0, n_symbols: int, *, sound_speed_mps: float):
@@ -689,6 +693,11 @@ def fit_whole_frame(
     inst = symbol_instants(config, delays[0], eps[0], beta[0])[ref_idx]
     noise = seg.filter(resid, inst, scale=1 + eps[0], offset_hz=f0 * eps[0], t_ref_s=delays[0])
     noise_var = max(float(np.mean(np.abs(noise) ** 2)), np.finfo(float).tiny)
+    # the pilot's own outputs' noise: its mean over the median-implied power (1 for Gaussian noise), the
+    # impulses that blanking left where the pilot lies (the noise windows around the frame may miss them)
+    pilot_noise = np.abs(noise[: min(config.n_pilot, noise.size)]) ** 2
+    median = float(np.median(pilot_noise)) if pilot_noise.size else 0.0
+    pilot_excess = max(1.0, float(np.mean(pilot_noise)) * math.log(2) / median) if median > 0 else 1.0
     es_n0 = np.abs(amps) ** 2 / noise_var
     crlb = known_signal_velocity_crlb_mps(config, es_n0, n_ref, sound_speed_mps=c)
     sigma_ls = c * sigma_b / (2 * np.pi * f0)
@@ -777,4 +786,5 @@ def fit_whole_frame(
         tilt_delay_s=tilt[order],
         curvature_s2=curv[order],
         curvature_noise_s4=curv_noise[order],
+        pilot_noise_excess=pilot_excess,
     )

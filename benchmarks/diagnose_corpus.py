@@ -1,0 +1,86 @@
+"""One corpus recording, frame by frame: what the channel was, what the receiver fitted, and how far off.
+
+Run: ``python benchmarks/diagnose_corpus.py FAMILY SEED`` (a recording's seed, as in the
+``seed`` column of ``results/bench_corpus_frames.csv``), ``--frames N``, ``--single-path``,
+``--depths``. Prints, per frame: the record's ``v_r_source``, SNR, range and v_r errors against
+the corpus's direct-path truth with their σ and error/σ, and the whole-frame fit's paths (delay
+after the first [µs], |gain| relative to it); then the true paths of the first frame (name, delay
+after the direct path [µs], closing speed [m/s], gain). A diagnosis aid for the rows the corpus
+report flags, not a benchmark: it times nothing and asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("family", choices=("steep", "far", "fading", "impulsive"))
+    ap.add_argument("seed", type=int)
+    ap.add_argument("--frames", type=int, default=10)
+    ap.add_argument("--single-path", action="store_true", help="the same recording with its echoes removed")
+    ap.add_argument("--depths", action="store_true", help="give the receiver the ends' depths")
+    args = ap.parse_args(argv)
+
+    import bench_corpus
+    import corpus
+    import seamodem.receive.frame as frame
+
+    # the receiver's whole-frame fits, as it makes them (several per frame when a fit on decisions is
+    # redone after a second decoding pass): wrap the name frame.py calls
+    fits: list = []
+    fit_whole_frame = frame.fit_whole_frame
+
+    def recording_fit(*a, **k):
+        fit = fit_whole_frame(*a, **k)
+        fits.append(fit)
+        return fit
+
+    truths: list = []
+    synthesize = bench_corpus.synthesize
+
+    def recording_synthesis(*a, **k):
+        rec = synthesize(*a, **k)
+        truths.append(rec.truth)
+        return rec
+
+    frame.fit_whole_frame = recording_fit
+    bench_corpus.synthesize = recording_synthesis
+    try:
+        rows = bench_corpus.run_recording(args.family, args.seed, args.frames, echoes=not args.single_path,
+                                          depths=args.depths)
+    finally:
+        frame.fit_whole_frame = fit_whole_frame
+        bench_corpus.synthesize = synthesize
+    sc = corpus.draw_scenario(args.family, args.seed)
+    print(f"{args.family} {args.seed}: nominal in-band SNR {sc.snr_db:.1f} dB, noise {sc.noise}, "
+          f"{len(fits)} whole-frame fits")
+    for r in rows:
+        if not r["detected"]:
+            print(f"frame {r['frame']}: not detected")
+            continue
+        er, ev = r["range_m"] - r["range_true_m"], r["v_r_mps"] - r["v_r_true_mps"]
+        print(f"frame {r['frame']} {r['v_r_source']:22s} SNR {r['snr_db']:5.1f} dB | range {er * 1e3:8.2f} mm "
+              f"σ {r['sigma_range_m'] * 1e3:7.2f} ({er / r['sigma_range_m']:6.1f}σ) | v_r {ev * 1e3:8.2f} mm/s "
+              f"σ {r['sigma_v_r_mps'] * 1e3:7.2f} ({ev / r['sigma_v_r_mps']:5.1f}σ) | paths {r.get('rec_n_paths')}")
+    print("whole-frame fits (delay after the first [µs], |gain| relative to it):")
+    for fit in fits:
+        d = np.asarray(fit.delays_s)
+        a = np.abs(np.asarray(fit.amplitudes))
+        print("  ", np.round((d - d[0]) * 1e6, 1).tolist(), np.round(a / a[0], 2).tolist())
+    if truths and truths[0]:
+        print("true paths of frame 0 (name, delay [µs], closing speed [m/s], gain):")
+        for name, delay, v, gain in truths[0][0]["paths"]:
+            print(f"   {name:3s} {delay * 1e6:9.1f} {v:7.3f} {gain:7.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
