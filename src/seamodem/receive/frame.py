@@ -486,6 +486,29 @@ def pilot_sidelobe_sigma_s(wf: WholeFrameFit, first: int, modelled_s: np.ndarray
     return sidelobe_pull_s(config, pilot, lags, np.abs(np.asarray(wf.amplitudes)[keep]) / a0, eps=eps)
 
 
+def pooled_pilot_pull_s(pool, paths, config: FrameConfig, pilot: np.ndarray, *, eps: float = 0.0) -> float:
+    """Median over recent frames' echoes of their pull on this frame's pilot arrival [s]
+    (:func:`~seamodem.receive.multipath.sidelobe_pull_s`), each echo left out where this frame's pilot fit
+    has a path within half a symbol of it.
+
+    Parameters
+    ----------
+    pool : iterable of (numpy.ndarray, numpy.ndarray)
+        Per frame, its echoes' lags after its first path [s] and their gains relative to it.
+    paths : PathFit
+        This frame's pilot fit (its paths and first arrival).
+    config, pilot, eps
+        As :func:`~seamodem.receive.multipath.sidelobe_pull_s`.
+    """
+    modelled = np.asarray(paths.delays_s, float) - float(paths.first_s)
+    half = config.symbol_period_s / 2
+    pulls = []
+    for lags, gains in pool:
+        keep = np.array([not np.any(np.abs(modelled - lag) < half) for lag in lags], dtype=bool)
+        pulls.append(sidelobe_pull_s(config, pilot, lags[keep], gains[keep], eps=eps) if keep.any() else 0.0)
+    return float(np.median(pulls)) if pulls else 0.0
+
+
 def time_scale_delay_s(sigma_v_mps: float, config: FrameConfig, *, sound_speed_mps: float) -> float:
     """The frame-start arrival's σ [s] from a σ of the Doppler that sets the symbol instants' time scale.
 
@@ -694,6 +717,11 @@ class FrameMeasurer:
         # the direct path's amplitude from frame to frame (decoded frames): a fading or beating slower than a
         # frame, whose rate within one frame is within its noise
         self._slow_fade_pool = _RatePool()
+        # the echoes the last decoded frames' fits held (lags after their first path [s], gains relative to
+        # it): a frame not decoded has its pilot's arrival as its range, and its fit on decisions may miss or
+        # misplace an echo those frames found
+        self._decoded_echoes: collections.deque[tuple[np.ndarray, np.ndarray]] = collections.deque(
+            maxlen=_ECHO_POOL_FRAMES)
         self._last_amplitude: tuple[float, float, float] | None = None
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
         #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate and the rate its v_r
@@ -933,6 +961,12 @@ class FrameMeasurer:
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
             self._curvature_pool.add_fit(fit[0], fit[1])
+            wf, first = fit[0], fit[1]
+            others = np.arange(len(wf.delays_s)) != first
+            a0 = abs(complex(wf.amplitudes[first]))
+            if a0 > 0:
+                self._decoded_echoes.append((np.asarray(wf.delays_s)[others] - float(wf.delays_s[first]),
+                                             np.abs(np.asarray(wf.amplitudes)[others]) / a0))
         pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
@@ -966,6 +1000,13 @@ class FrameMeasurer:
         pilot_pull = 0.0 if shown is None else pilot_sidelobe_sigma_s(
             shown[0], shown[1], m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
         pilot_excess = 1.0 if shown is None else float(shown[0].pilot_noise_excess)
+        if (fit is None or fit[2] != "whole_frame") and self._decoded_echoes:
+            # the pilot's arrival is the range: the echoes of the last decoded frames pull it too (the median
+            # of their pulls), where this frame's own fit on decisions did not see them (an impulsive
+            # recording's bottom echo at 82 µs, which decoded fits found at 83–120 µs and one on decisions at
+            # 22 µs: its pilot's arrival 13.7 mm off with σ 2.0 mm, pull 0.5 mm against their 19–21 mm)
+            pilot_pull = max(pilot_pull, pooled_pilot_pull_s(self._decoded_echoes, m.paths, self.config, self.pilot,
+                                                            eps=m.pilot.v_mps / c))
         sigma_tau_rejected = 0.0
         if rejected is not None:
             sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c,
@@ -1073,6 +1114,8 @@ _KIN_HALF_WINDOW = 3
 #: record and its neighbours, the range's (``range_gaps``) by 0.127 of it times the spacing (equal spacing
 #: 1–3 s, 0.3 s frames; tests/receive/test_kinematic_check.py); a turn's onset and end are such steps, of
 #: either sign: the gaps within this share of the second difference are not counted
+#: decoded frames whose echoes pull a later undecoded frame's pilot arrival (``pooled_pilot_pull_s``)
+_ECHO_POOL_FRAMES = 5
 _TURN_SHARE = 0.15
 #: the same for the speed's gap against the second difference the ranges show (their third differences,
 #: ``_turn_bounds_from_ranges``): at most 0.143 (1 s spacing) to 0.209 (3 s) of it
