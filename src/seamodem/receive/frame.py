@@ -143,6 +143,8 @@ def detector_options(settings: ReceiverSettings, pilot: np.ndarray) -> dict:
 
 #: a fit on decisions is not used when its direct-path Es/N0 is below this share of the measured SNR's
 _DECISIONS_MIN_ES_N0_SHARE = 0.1
+#: decoded frames whose echoes pull a later undecoded frame's pilot arrival (``pooled_pilot_pull_s``)
+_ECHO_POOL_FRAMES = 5
 
 
 def direct_path_share(m: FrameMeasurement) -> float:
@@ -468,44 +470,54 @@ def bank_echo_sigma_mps(wf: WholeFrameFit, first: int, config: FrameConfig) -> f
     return math.sqrt(total / 3) if math.isfinite(total) else 0.0
 
 
+def fit_echoes(wf: WholeFrameFit, first: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """A whole-frame fit's paths other than ``first``: their lags after it [s] and their gains relative to
+    it; None when its gain is not positive."""
+    a0 = abs(complex(wf.amplitudes[first]))
+    if not a0 > 0:
+        return None
+    others = np.arange(len(wf.delays_s)) != first
+    return (np.asarray(wf.delays_s, float)[others] - float(wf.delays_s[first]),
+            np.abs(np.asarray(wf.amplitudes)[others]) / a0)
+
+
+def unmodelled_pull_s(lags_s: np.ndarray, gains: np.ndarray, modelled_s: np.ndarray, config: FrameConfig,
+                      pilot: np.ndarray, *, eps: float = 0.0) -> float:
+    """σ [s] of the pilot's arrival from echoes (lags after the first path, gains relative to it) that its
+    fit did not model (none of its paths, ``modelled_s`` after the same first path, within half a
+    symbol): :func:`~seamodem.receive.multipath.sidelobe_pull_s`."""
+    modelled = np.asarray(modelled_s, float)
+    half = config.symbol_period_s / 2
+    keep = np.array([not np.any(np.abs(modelled - lag) < half) for lag in lags_s], dtype=bool)
+    return sidelobe_pull_s(config, pilot, lags_s[keep], gains[keep], eps=eps)
+
+
 def pilot_sidelobe_sigma_s(wf: WholeFrameFit, first: int, modelled_s: np.ndarray, config: FrameConfig,
                            pilot: np.ndarray, *, eps: float = 0.0) -> float:
     """σ [s] of the pilot's arrival from the echoes the whole-frame fit holds and the pilot's arrival fit
-    did not model (none of its paths within half a symbol): :func:`~seamodem.receive.multipath.sidelobe_pull_s`.
-    """
-    a0 = abs(complex(wf.amplitudes[first]))
-    if not a0 > 0:
+    (its paths' delays ``modelled_s``) did not model: :func:`unmodelled_pull_s`."""
+    echoes = fit_echoes(wf, first)
+    if echoes is None:
         return 0.0
-    half = config.symbol_period_s / 2
-    modelled = np.asarray(modelled_s, float)
-    keep = [p for p in range(len(wf.delays_s)) if p != first
-            and not np.any(np.abs(modelled - float(wf.delays_s[p])) < half)]
-    if not keep:
-        return 0.0
-    lags = np.asarray(wf.delays_s)[keep] - float(wf.delays_s[first])
-    return sidelobe_pull_s(config, pilot, lags, np.abs(np.asarray(wf.amplitudes)[keep]) / a0, eps=eps)
+    return unmodelled_pull_s(*echoes, np.asarray(modelled_s, float) - float(wf.delays_s[first]), config, pilot,
+                             eps=eps)
 
 
 def pooled_pilot_pull_s(pool, paths, config: FrameConfig, pilot: np.ndarray, *, eps: float = 0.0) -> float:
     """Median over recent frames' echoes of their pull on this frame's pilot arrival [s]
-    (:func:`~seamodem.receive.multipath.sidelobe_pull_s`), each echo left out where this frame's pilot fit
-    has a path within half a symbol of it.
+    (:func:`unmodelled_pull_s`: echoes this frame's pilot fit modelled left out).
 
     Parameters
     ----------
     pool : iterable of (numpy.ndarray, numpy.ndarray)
-        Per frame, its echoes' lags after its first path [s] and their gains relative to it.
+        Per frame, its echoes (:func:`fit_echoes`).
     paths : PathFit
         This frame's pilot fit (its paths and first arrival).
     config, pilot, eps
         As :func:`~seamodem.receive.multipath.sidelobe_pull_s`.
     """
     modelled = np.asarray(paths.delays_s, float) - float(paths.first_s)
-    half = config.symbol_period_s / 2
-    pulls = []
-    for lags, gains in pool:
-        keep = np.array([not np.any(np.abs(modelled - lag) < half) for lag in lags], dtype=bool)
-        pulls.append(sidelobe_pull_s(config, pilot, lags[keep], gains[keep], eps=eps) if keep.any() else 0.0)
+    pulls = [unmodelled_pull_s(lags, gains, modelled, config, pilot, eps=eps) for lags, gains in pool]
     return float(np.median(pulls)) if pulls else 0.0
 
 
@@ -961,12 +973,9 @@ class FrameMeasurer:
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
             self._curvature_pool.add_fit(fit[0], fit[1])
-            wf, first = fit[0], fit[1]
-            others = np.arange(len(wf.delays_s)) != first
-            a0 = abs(complex(wf.amplitudes[first]))
-            if a0 > 0:
-                self._decoded_echoes.append((np.asarray(wf.delays_s)[others] - float(wf.delays_s[first]),
-                                             np.abs(np.asarray(wf.amplitudes)[others]) / a0))
+            echoes = fit_echoes(fit[0], fit[1])
+            if echoes is not None:
+                self._decoded_echoes.append(echoes)
         pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
@@ -1114,8 +1123,6 @@ _KIN_HALF_WINDOW = 3
 #: record and its neighbours, the range's (``range_gaps``) by 0.127 of it times the spacing (equal spacing
 #: 1–3 s, 0.3 s frames; tests/receive/test_kinematic_check.py); a turn's onset and end are such steps, of
 #: either sign: the gaps within this share of the second difference are not counted
-#: decoded frames whose echoes pull a later undecoded frame's pilot arrival (``pooled_pilot_pull_s``)
-_ECHO_POOL_FRAMES = 5
 _TURN_SHARE = 0.15
 #: the same for the speed's gap against the second difference the ranges show (their third differences,
 #: ``_turn_bounds_from_ranges``): at most 0.143 (1 s spacing) to 0.209 (3 s) of it

@@ -214,6 +214,13 @@ def in_band_snr_db(bb: np.ndarray, plan: FrontEndPlan, t0_s: float, *, t_start_s
     return 10 * math.log10(max(signal, 1e-30 * noise) / max(in_band, np.finfo(float).tiny))
 
 
+def power_excess(power: np.ndarray) -> float | None:
+    """Mean over median-implied mean of noise powers |x|² (× ln 2: 1 for Gaussian noise, whose |x|² is
+    exponential); None when the median is 0 or there are none. Impulses raise the mean, not the median."""
+    median = float(np.median(power)) if np.size(power) else 0.0
+    return float(np.mean(power)) * math.log(2) / median if median > 0 else None
+
+
 def impulse_excess(bb: np.ndarray, plan: FrontEndPlan, t0_s: float, *, t_start_s: float, duration_s: float) -> float:
     """Mean over median-implied noise power in the noise windows around a frame (≥ 1; 1 when unknown).
 
@@ -231,10 +238,9 @@ def impulse_excess(bb: np.ndarray, plan: FrontEndPlan, t0_s: float, *, t_start_s
     ):
         lo, hi = int(math.ceil((a - t0_s) * fs)), int(math.floor((b - t0_s) * fs))
         if lo >= 0 and hi <= len(bb) and hi - lo >= 0.8 * NOISE_WINDOW_S * fs:
-            power = np.abs(bb[lo:hi]) ** 2
-            median = float(np.median(power))
-            if median > 0:
-                ratios.append(float(np.mean(power)) * math.log(2) / median)
+            ratio = power_excess(np.abs(bb[lo:hi]) ** 2)
+            if ratio is not None:
+                ratios.append(ratio)
     return max(1.0, min(ratios)) if ratios else 1.0
 
 

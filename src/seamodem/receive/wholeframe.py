@@ -45,6 +45,7 @@ from numba import njit
 from ..config import FrameConfig
 from .bounds import gabor_bandwidth_hz
 from .doppler import log_amplitude_rate
+from .measure import power_excess
 from .multipath import raised_cosine
 
 __all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
@@ -236,6 +237,7 @@ def joint_delay_inflation(delays_s, amplitudes, *, config: FrameConfig, v_mps=No
         return np.full(n, np.inf)
     kappa = np.diag(inv)[0::3] * np.diag(j)[0::3]
     return np.where(np.isfinite(kappa), np.maximum(kappa, 1.0), np.inf)
+
 
 def joint_delay_sigma_s(sigma_s, delays_s, amplitudes, *, config: FrameConfig, v_mps=None,
                         sound_speed_mps: float = 1500.0) -> np.ndarray:
@@ -695,9 +697,7 @@ def fit_whole_frame(
     noise_var = max(float(np.mean(np.abs(noise) ** 2)), np.finfo(float).tiny)
     # the pilot's own outputs' noise: its mean over the median-implied power (1 for Gaussian noise), the
     # impulses that blanking left where the pilot lies (the noise windows around the frame may miss them)
-    pilot_noise = np.abs(noise[: min(config.n_pilot, noise.size)]) ** 2
-    median = float(np.median(pilot_noise)) if pilot_noise.size else 0.0
-    pilot_excess = max(1.0, float(np.mean(pilot_noise)) * math.log(2) / median) if median > 0 else 1.0
+    pilot_excess = max(1.0, power_excess(np.abs(noise[: config.n_pilot]) ** 2) or 1.0)
     es_n0 = np.abs(amps) ** 2 / noise_var
     crlb = known_signal_velocity_crlb_mps(config, es_n0, n_ref, sound_speed_mps=c)
     sigma_ls = c * sigma_b / (2 * np.pi * f0)
