@@ -69,9 +69,12 @@ def test_the_depths_alone_take_the_profile_of_a_simulated_recording(tmp_path):
     assert all(abs(r.horizontal_range_m - 300.0) < 0.01 for r in recs)
 
 
-def test_the_depths_without_any_profile_give_the_merged_image_sigma(beacon, tmp_path):
-    # no profile anywhere: a straight ray at c, and the depths still set the arrival's σ for a surface image
-    # merged with the direct path: 2·2·3/(R·c) = 27 µs at about 300 m, 4 cm, below 1/B = 112 µs
+def test_the_depths_without_any_profile_give_the_merged_image(beacon, tmp_path):
+    # no profile anywhere: a straight ray at c, and the depths still give a surface image merged with the
+    # direct path: 2·2·3/(R·c) = 27 µs at about 300 m, 4 cm, below 1/B = 112 µs, whose predicted bias is taken
+    # out of the arrival and whose σ (the waves, the reflection) is the arrival's
+    from seamodem.receive.frame import merged_image_bias_s
+
     plain, deep = tmp_path / "plain.csv", tmp_path / "deep.csv"
     assert main(["rx", str(beacon[2]), "-o", str(plain), "-q"]) == 0
     assert main(["rx", str(beacon[2]), "-o", str(deep), "-q", "--beacon-depth", "2", "--vehicle-depth", "3"]) == 0
@@ -79,9 +82,10 @@ def test_the_depths_without_any_profile_give_the_merged_image_sigma(beacon, tmp_
     assert header["beacon_depth_m"] == 2.0 and header["vehicle_depth_m"] == 3.0
     assert "sound_speed_profile" not in header
     for r, d in zip(recs, deep_recs, strict=True):
-        assert d.range_m == r.range_m
-        image = 2 * 2.0 * 3.0 / r.range_m  # c·δ [m]
-        assert r.sigma_range_m < 0.2 * image
-        assert d.sigma_range_m == pytest.approx(np.hypot(r.sigma_range_m, image), rel=0.01)
-
-
+        bias, spread = merged_image_bias_s(r.range_m, 2.0, 3.0, config=get_preset("jmse2024"), sound_speed_mps=1500.0)
+        assert bias != 0.0 and spread > 0.0
+        assert d.range_m == pytest.approx(r.range_m - 1500.0 * bias, abs=1e-9)
+        # (the image's σ in place of the channel bend's bound, which the image explains)
+        assert 1500.0 * spread <= d.sigma_range_m <= np.hypot(r.sigma_range_m, 1500.0 * spread) * (1 + 1e-9)
+        # this recording has no surface image: the shift for one is within the σ it brings
+        assert abs(d.range_m - r.range_m) <= d.sigma_range_m

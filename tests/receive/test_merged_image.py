@@ -184,3 +184,68 @@ def test_waiting_for_later_frames_changes_only_the_sigmas():
         assert dataclasses.replace(held[k], sigma_range_m=now[k].sigma_range_m,
                                    sigma_v_r_mps=now[k].sigma_v_r_mps) == now[k]
     assert grew >= 1
+
+
+def _rew_bias(delta_s: float, rho: float, theta: float) -> float:
+    """The closed form of a weak merge (δ·B ≪ 1): the group delay Re(w)·δ, w = z/(1 + z)."""
+    z = -rho * np.exp(-1j * theta)
+    return float((z / (1 + z)).real * delta_s)
+
+
+def test_the_predicted_bias_is_the_closed_form_of_a_weak_merge():
+    from seamodem.receive.frame import (DEPTH_SIGMA_M, SURFACE_REFLECTION, WAVE_AMPLITUDE_M,
+                                        merged_image_bias_s, merged_image_delay_s)
+
+    # ends 3 m deep, 672 m apart: δ = 17.9 µs (δ·B = 0.16), f₀δ = 1/2 cycle: the image adds to the path,
+    # farthest from the null
+    zb = zv = 3.0
+    r = 2 * zb * zv / (C * 0.5 / CFG.carrier_hz)
+    delta = merged_image_delay_s(r, zb, zv, config=CFG, sound_speed_mps=C)
+    assert CFG.carrier_hz * delta == pytest.approx(0.5, abs=0.01)
+    bias, sigma = merged_image_bias_s(r, zb, zv, config=CFG, sound_speed_mps=C)
+    # the closed form Re(w)·δ' (the group delay, not the matched filter's peak) over a fine grid of what is
+    # not known: the waves move the image's path by ±2·a·sin θ (its delay and phase together), the depths'
+    # error δ ∝ z_b·z_v by two of its σ, and ρ
+    wave = 2 * WAVE_AMPLITUDE_M * (zb + zv) / r / C + 2 * delta * DEPTH_SIGMA_M * np.hypot(1 / zb, 1 / zv)
+    closed = np.array([_rew_bias(d, rho, 2 * np.pi * CFG.carrier_hz * d)
+                       for d in delta + wave * np.linspace(-1, 1, 201)
+                       for rho in np.linspace(*SURFACE_REFLECTION, 21)])
+    assert bias == pytest.approx(np.mean(closed), abs=0.05 * delta), (bias, np.mean(closed))
+    assert sigma == pytest.approx(np.std(closed), rel=0.15), (sigma, np.std(closed))
+    assert sigma < 0.2 * delta
+
+
+def test_near_the_null_the_prediction_says_it_does_not_know():
+    from seamodem.receive.frame import merged_image_bias_s, merged_image_delay_s
+
+    # f₀δ a whole number of cycles: the paths cancel, and the arrival's peak is anywhere within ~δ
+    zb = 4.0
+    r = 2 * zb * zb / (C * 1.0 / CFG.carrier_hz)  # δ = 1/f₀ = 35.7 µs (δ·B = 0.32)
+    delta = merged_image_delay_s(r, zb, zb, config=CFG, sound_speed_mps=C)
+    assert CFG.carrier_hz * delta == pytest.approx(1.0, abs=0.01)
+    _, sigma = merged_image_bias_s(r, zb, zb, config=CFG, sound_speed_mps=C)
+    assert sigma > 0.5 * delta
+    # a resolved image, or no geometry: nothing predicted
+    assert merged_image_bias_s(300.0, 10.0, 10.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0)
+    assert merged_image_bias_s(float("nan"), 3.0, 3.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0)
+
+
+def test_with_the_depths_the_merged_image_is_taken_out_of_the_range():
+    from seamodem.receive.frame import merged_image_delay_s
+
+    # ends 3 m deep, 825 m apart (tof 0.55 s): the image −0.9 of the direct path, δ = 14.5 µs behind
+    zb = zv = 3.0
+    delta = merged_image_delay_s(C * 0.55, zb, zv, config=CFG, sound_speed_mps=C)
+    kwargs = dict(n_frames=6, snr_db=12.0, delta_s=delta, image_gain=-0.9)
+    blind, tof = _recording(8104, **kwargs)
+    told, _ = _recording(8104, beacon_depth_m=zb, vehicle_depth_m=zv, **kwargs)
+    err_blind = np.array([blind[k].range_m - C * tof[k] for k in range(6)])
+    err = np.array([told[k].range_m - C * tof[k] for k in range(6)])
+    sigmas = np.array([told[k].sigma_range_m for k in range(6)])
+    # without the depths the range is long by about 0.45 δ·c (9.8 mm), frame after frame
+    assert np.all(err_blind > 0.3 * delta * C), err_blind
+    # with them, the bias is predicted from the geometry and taken out: within 3σ, σ at the fit's scale
+    # (not the image's delay, 22 mm, which the σ was before)
+    assert np.all(np.abs(err) <= 3 * sigmas), (err, sigmas)
+    assert np.all(np.abs(err) < 0.1 * delta * C), err
+    assert np.all(sigmas < 0.15 * delta * C), sigmas

@@ -41,7 +41,7 @@ from .multipath import find_echoes, sidelobe_pull_s
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .two_way import two_way_range_m
-from .wholeframe import WholeFrameFit, fit_whole_frame, joint_delay_sigma_s
+from .wholeframe import WholeFrameFit, fit_whole_frame, joint_delay_inflation, joint_delay_sigma_s
 
 __all__ = [
     "BasebandBuffers",
@@ -56,6 +56,7 @@ __all__ = [
     "bank_echo_sigma_mps",
     "earlier_path_gap_s",
     "merged_image_delay_s",
+    "merged_image_bias_s",
     "two_carrier_sigma_mps",
     "time_scale_delay_s",
     "unmodelled_sigmas",
@@ -223,6 +224,87 @@ def merged_image_delay_s(range_m: float, beacon_depth_m: float, vehicle_depth_m:
     delay = (math.hypot(h, beacon_depth_m + vehicle_depth_m) - range_m) / sound_speed_mps
     resolution = 1.0 / (config.symbol_rate_hz * (1 + config.rolloff))
     return delay if delay < resolution else 0.0
+
+
+#: magnitude of the sea surface's coherent reflection at grazing incidence (sign −1): the Rayleigh roughness
+#: loss exp(−2(k·h·sin θ)²) of 0.1–0.5 m waves at the angles where the image merges (sin θ < 0.02) is
+#: below 20 %
+SURFACE_REFLECTION = (0.8, 0.98)
+#: surface elevation [m] the image's phase rides (waves of this amplitude; sea state 3), and the ends'
+#: depths' σ [m] (a pressure sensor, a surveyed mooring): both spread the image's carrier phase
+WAVE_AMPLITUDE_M, DEPTH_SIGMA_M = 0.5, 0.1
+
+
+def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: float, *, config: FrameConfig,
+                        sound_speed_mps: float) -> tuple[float, float]:
+    """The bias of the direct path's arrival that a merged surface image puts on it, and its σ [s].
+
+    The ends' depths give the image's extra delay δ (:func:`merged_image_delay_s`) and with it the image's
+    carrier phase: the channel is H(f) = 1 + z·e^{−j2πfδ}, z = −ρ·e^{−j2πf₀δ}. An arrival fitted as one
+    pulse is the peak of the matched filter's output, |∫ RC(f)·H(f)·e^{j2πfτ} df| over τ (RC: the
+    raised-cosine spectrum of pulse and matched filter): about Re(w)·δ, w = z/(1 + z), which for
+    ρ ≈ 0.9 is +0.4–0.47·δ over most of the phase, and large and early near the null (f₀δ near a whole
+    number of cycles, where the two paths cancel). The bias is that peak's mean over what is not known:
+    ρ over :data:`SURFACE_REFLECTION`, and the image's delay (and with it its phase) over the waves'
+    ±2·a·sin θ of path (a = :data:`WAVE_AMPLITUDE_M`, θ the grazing angle) and over two σ of the depths'
+    error (:data:`DEPTH_SIGMA_M`); its σ is the peaks' spread over them. (0, 0) when the image is resolved
+    or the geometry is not given.
+
+    Examples
+    --------
+    Ends 3 m deep, 800 m apart: the image 15 µs behind, f₀δ = 0.42 cycles, away from the null (the
+    waves move it by ±1.6 µs):
+
+    >>> from seamodem import get_preset
+    >>> bias, sigma = merged_image_bias_s(800.0, 3.0, 3.0, config=get_preset("jmse2024"), sound_speed_mps=1500.0)
+    >>> round(bias * 1e6, 1), round(sigma * 1e6, 1)  # [µs]
+    (7.0, 2.0)
+    """
+    delta = merged_image_delay_s(range_m, beacon_depth_m, vehicle_depth_m, config=config,
+                                 sound_speed_mps=sound_speed_mps)
+    if not delta > 0:
+        return 0.0, 0.0
+    c, f0 = sound_speed_mps, config.carrier_hz
+    # the image's path moves with the surface where it reflects, by ±2·a·sin θ (the waves: uniform over it),
+    # and δ ∝ z_b·z_v with the depths' error, by δ·σ_z·√(1/z_b² + 1/z_v²) (two σ each way); its carrier
+    # phase 2π·f₀·δ moves with it
+    sin_grazing = (beacon_depth_m + vehicle_depth_m) / max(range_m, 1e-9)
+    waves = 2 * WAVE_AMPLITUDE_M * sin_grazing / c
+    depths = 2 * delta * DEPTH_SIGMA_M * math.hypot(1 / max(beacon_depth_m, DEPTH_SIGMA_M),
+                                                    1 / max(vehicle_depth_m, DEPTH_SIGMA_M))
+    deltas = np.maximum(delta + (waves + depths) * np.linspace(-1.0, 1.0, 13), 0.0)
+    rho = np.linspace(*SURFACE_REFLECTION, 3)
+    z = -(rho[:, None] * np.exp(-2j * np.pi * f0 * deltas[None, :])).ravel()
+    lags = np.broadcast_to(deltas[None, :], (len(rho), len(deltas))).ravel()
+    rs = config.symbol_rate_hz
+    f = np.linspace(-(1 + config.rolloff) * rs / 2, (1 + config.rolloff) * rs / 2, 161)
+    edge = np.clip((np.abs(f) - (1 - config.rolloff) * rs / 2) / (config.rolloff * rs), 0.0, 1.0)
+    rc = 0.5 * (1 + np.cos(np.pi * edge))
+    # the matched filter's output around the paths, for every (ρ, phase): its peak on a grid, then a parabola
+    reach = 2 * float(np.max(deltas)) + 10e-6
+    taus = np.linspace(-reach, reach, 241)
+    spectra = rc[None, :] * (1 + z[:, None] * np.exp(-2j * np.pi * f[None, :] * lags[:, None]))
+    out = np.abs(spectra @ np.exp(2j * np.pi * f[:, None] * taus[None, :]))
+    i = np.clip(np.argmax(out, axis=1), 1, len(taus) - 2)
+    rows = np.arange(len(z))
+    ym, y0, yp = out[rows, i - 1], out[rows, i], out[rows, i + 1]
+    den = ym - 2 * y0 + yp
+    step = np.where(den < 0, 0.5 * (ym - yp) / np.where(den < 0, den, -1.0), 0.0)
+    peaks = taus[i] + np.clip(step, -0.5, 0.5) * (taus[1] - taus[0])
+    return float(np.mean(peaks)), float(np.std(peaks))
+
+
+#: the direct path's κ (``joint_delay_inflation``) beyond which other fitted paths couple to its arrival, and
+#: the surface image alone does not predict its bias (the whole-frame fit's joint steps take the same 1.05)
+_IMAGE_ALONE_KAPPA = 1.05
+
+
+def direct_path_kappa(wf: WholeFrameFit, first: int, config: FrameConfig, sound_speed_mps: float) -> float:
+    """κ ≥ 1 of the fit's direct path (``joint_delay_inflation``): 1 when no other path couples to it."""
+    if len(wf.delays_s) < 2:
+        return 1.0
+    return float(joint_delay_inflation(wf.delays_s, wf.amplitudes, config=config, v_mps=wf.v_mps,
+                                       sound_speed_mps=sound_speed_mps)[first])
 
 
 def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *, echoes: bool) -> float:
@@ -866,6 +948,8 @@ class FrameMeasurer:
         unmodelled = doppler.pop("sigma_tau_unmodelled", 0.0)
         sigma_tau = math.hypot(sigma_tau, unmodelled)
         shape_used = unmodelled  # without a fit: the pooled bend, or a set-aside fit's terms (the larger)
+        shape_var = unmodelled**2  # the channel shape's share of the arrival's variance
+        kappa = 1.0  # the whole-frame fit's direct path's κ (joint_delay_inflation), when it has one
         sigma_first = earlier_path_gap_s(m)
         # the direct path's data-aided arrival over the frame, when decoded. Not on decisions: they were taken
         # at the pilot's timing, and pull the fit's arrival towards it (22 single-path frames at −3…−1 dB,
@@ -881,20 +965,41 @@ class FrameMeasurer:
             # bound off) the gap less its expectation: beyond 3σ only left those frames 3–5σ off
             # the channel's shape (a merged echo) biases both arrivals alike: it is not in their gap, and goes
             # to the σ of the one used (in the gap's expectation on decisions, a fit 39 mm off kept σ 2.8 mm)
-            t_fit, sigma_fit, sigma_shape = timing
+            t_fit, sigma_fit, sigma_shape, kappa = timing
             gap_k = 9 if doppler["v_r_source"] == "whole_frame" else 1
             excess = (t_fit - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
             if doppler["v_r_source"] == "whole_frame":
                 t_arr, sigma_tau = t_fit, sigma_fit
                 noise_tau = sigma_fit
+                shape_var = 0.0
             sigma_tau = math.sqrt(sigma_tau**2 + sigma_shape**2 + max(0.0, excess))
             shape_used = sigma_shape
+            shape_var += sigma_shape**2
         sigma_tau = math.hypot(sigma_tau, sigma_first)
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
             if s.beacon_depth_m is not None and s.vehicle_depth_m is not None:
-                sigma_tau = math.hypot(sigma_tau, merged_image_delay_s(
-                    c * tof, s.beacon_depth_m, s.vehicle_depth_m, config=self.config, sound_speed_mps=c))
+                # the ends' depths give the surface image and its phase: a merged one's bias on the arrival
+                # is taken out, and its σ (the phase and reflection not known) is the channel shape's in place
+                # of the bend's bound, which it explains (the corpus's far family: ranges 5–19 mm long, 0.4–0.47
+                # of the image's delay, as predicted)
+                bias, spread = merged_image_bias_s(c * tof, s.beacon_depth_m, s.vehicle_depth_m, config=self.config,
+                                                   sound_speed_mps=c)
+                # how much the paths fitted around the direct one move its arrival: the pilot's fit's, and
+                # the whole frame's (a fit on decisions too: its paths are there for the pilot's arrival)
+                if len(m.paths.delays_s) > 1:
+                    kappa = max(kappa, float(joint_delay_inflation(m.paths.delays_s, m.paths.amplitudes,
+                                                                   config=self.config)[
+                        int(np.argmin(np.abs(np.asarray(m.paths.delays_s) - m.paths.first_s)))]))
+                if kappa > _IMAGE_ALONE_KAPPA:
+                    # another path fitted within the pulse's width (a merged bottom image) moves the arrival
+                    # too, which the image alone does not predict: the image's delay is the honest scale
+                    sigma_tau = math.hypot(sigma_tau, merged_image_delay_s(
+                        c * tof, s.beacon_depth_m, s.vehicle_depth_m, config=self.config, sound_speed_mps=c))
+                elif bias != 0.0 or spread > 0.0:
+                    t_arr, tof = t_arr - bias, tof - bias
+                    sigma_tau = math.sqrt(max(0.0, sigma_tau**2 - shape_var) + spread**2)
+                    shape_used = math.inf  # the image modelled: a later bend pooled is its too
         else:
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
@@ -1062,7 +1167,8 @@ class FrameMeasurer:
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first]),
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate))), \
-                (float(wf.delays_s[first]), sigma_tau_fit, shape)
+                (float(wf.delays_s[first]), sigma_tau_fit, shape,
+                 direct_path_kappa(wf, first, self.config, c) if self.settings.beacon_depth_m is not None else 1.0)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank

@@ -81,9 +81,14 @@ class ReceiverSettings:
         extra delay at the measured range, 2·z_b·z_v/(R·c) for R ≫ z, is
         known: below the signal's resolution 1/B it is an echo merged with the
         direct path, which biases the arrival by a fraction of that delay with
-        no signature one frame shows, and the arrival's σ takes the delay
-        (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without them
-        the σ cannot cover that bias (docs/receiver.md).
+        no signature one frame shows. With the delay the image's carrier phase
+        is known too, and so is the bias (0.4–0.47 of the delay for most
+        phases): it is taken out of the arrival, whose σ then covers the
+        phase and reflection not known (waves, the depths' error:
+        :func:`~seamodem.receive.frame.merged_image_bias_s`). Where another
+        fitted path couples to the direct one, the delay is the arrival's σ
+        (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without the
+        depths the σ cannot cover that bias (docs/receiver.md).
     lookahead_frames : int
         Frames measured after a record before it is given out: its range σ
         then also covers the channel bend that those later frames show
