@@ -202,7 +202,7 @@ def test_the_predicted_bias_is_the_closed_form_of_a_weak_merge():
     r = 2 * zb * zv / (C * 0.5 / CFG.carrier_hz)
     delta = merged_image_delay_s(r, zb, zv, config=CFG, sound_speed_mps=C)
     assert CFG.carrier_hz * delta == pytest.approx(0.5, abs=0.01)
-    bias, sigma = merged_image_bias_s(r, zb, zv, config=CFG, sound_speed_mps=C)
+    bias, sigma, _, _ = merged_image_bias_s(r, zb, zv, config=CFG, sound_speed_mps=C)
     # the closed form Re(w)·δ' (the group delay, not the matched filter's peak) over a fine grid of what is
     # not known: the waves move the image's path by ±2·a·sin θ (its delay and phase together), the depths'
     # error δ ∝ z_b·z_v by two of its σ, and ρ
@@ -223,11 +223,11 @@ def test_near_the_null_the_prediction_says_it_does_not_know():
     r = 2 * zb * zb / (C * 1.0 / CFG.carrier_hz)  # δ = 1/f₀ = 35.7 µs (δ·B = 0.32)
     delta = merged_image_delay_s(r, zb, zb, config=CFG, sound_speed_mps=C)
     assert CFG.carrier_hz * delta == pytest.approx(1.0, abs=0.01)
-    _, sigma = merged_image_bias_s(r, zb, zb, config=CFG, sound_speed_mps=C)
+    sigma = merged_image_bias_s(r, zb, zb, config=CFG, sound_speed_mps=C).sigma_s
     assert sigma > 0.5 * delta
     # a resolved image, or no geometry: nothing predicted
-    assert merged_image_bias_s(300.0, 10.0, 10.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0)
-    assert merged_image_bias_s(float("nan"), 3.0, 3.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0)
+    assert merged_image_bias_s(300.0, 10.0, 10.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0, 0j, 0.0)
+    assert merged_image_bias_s(float("nan"), 3.0, 3.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0, 0j, 0.0)
 
 
 def test_with_the_depths_the_merged_image_is_taken_out_of_the_range():
@@ -249,3 +249,31 @@ def test_with_the_depths_the_merged_image_is_taken_out_of_the_range():
     assert np.all(np.abs(err) <= 3 * sigmas), (err, sigmas)
     assert np.all(np.abs(err) < 0.1 * delta * C), err
     assert np.all(sigmas < 0.15 * delta * C), sigmas
+
+
+def test_the_bend_a_taken_out_image_explains_is_not_counted_again():
+    from types import SimpleNamespace
+
+    from seamodem.receive.frame import CURVATURE_POOL_FRAMES, MergedImage, _CurvaturePool, channel_shape_delay_s
+
+    rng = np.random.default_rng(13)
+    noise = 1e-20  # [s⁴]
+    image = MergedImage(bias_s=7e-6, sigma_s=2e-6, curvature_s2=complex(-4e-10, 1e-10), curvature_var_s4=noise)
+    explained, more = _CurvaturePool(), _CurvaturePool()
+    blind = _CurvaturePool()
+    for _ in range(CURVATURE_POOL_FRAMES):
+        bend = _noisy_bend(rng, image.curvature_s2, noise)
+        explained.add_fit(_fit(bend, noise), 0, image)
+        blind.add_fit(_fit(bend, noise), 0)
+        more.add_fit(_fit(bend + 3e-10, noise), 0, image)  # another bend besides the image's
+    assert blind.delay_s > 0  # the image's bend, counted when nothing explains it
+    assert explained.delay_s == 0.0
+    assert more.delay_s > 0
+    # the frame's own tilt the same way (its noise beyond 3σ, the image's variance added to it)
+    fit = SimpleNamespace(curvature_s2=np.array([image.curvature_s2]), curvature_noise_s4=np.array([noise]),
+                          tilt_delay_s=np.array([5e-6]))
+    assert channel_shape_delay_s(fit, 0) == 5e-6
+    assert channel_shape_delay_s(fit, 0, image=image) == 0.0
+    fit.curvature_s2 = np.array([image.curvature_s2 + 1e-9])
+    assert channel_shape_delay_s(fit, 0, image=image) == pytest.approx(
+        (1e-18 - 9 * 2 * noise) ** 0.25 / np.sqrt(3), rel=1e-9)

@@ -235,9 +235,22 @@ SURFACE_REFLECTION = (0.8, 0.98)
 WAVE_AMPLITUDE_M, DEPTH_SIGMA_M = 0.5, 0.1
 
 
+class MergedImage(NamedTuple):
+    """What a surface image merged with the direct path does to it (:func:`merged_image_bias_s`)."""
+
+    #: the arrival's bias [s] and its σ
+    bias_s: float
+    sigma_s: float
+    #: the channel's curvature it makes, in ``WholeFrameFit.curvature_s2``'s units (d²ln H/df²/(2π)² [s²]),
+    #: and that curvature's variance over what is not known [s⁴]
+    curvature_s2: complex
+    curvature_var_s4: float
+
+
 def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: float, *, config: FrameConfig,
-                        sound_speed_mps: float) -> tuple[float, float]:
-    """The bias of the direct path's arrival that a merged surface image puts on it, and its σ [s].
+                        sound_speed_mps: float) -> MergedImage:
+    """The bias of the direct path's arrival that a merged surface image puts on it, its σ, and the bend
+    it gives the channel [s, s, s², s⁴].
 
     The ends' depths give the image's extra delay δ (:func:`merged_image_delay_s`) and with it the image's
     carrier phase: the channel is H(f) = 1 + z·e^{−j2πfδ}, z = −ρ·e^{−j2πf₀δ}. An arrival fitted as one
@@ -247,8 +260,10 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     number of cycles, where the two paths cancel). The bias is that peak's mean over what is not known:
     ρ over :data:`SURFACE_REFLECTION`, and the image's delay (and with it its phase) over the waves'
     ±2·a·sin θ of path (a = :data:`WAVE_AMPLITUDE_M`, θ the grazing angle) and over two σ of the depths'
-    error (:data:`DEPTH_SIGMA_M`); its σ is the peaks' spread over them. (0, 0) when the image is resolved
-    or the geometry is not given.
+    error (:data:`DEPTH_SIGMA_M`); its σ is the peaks' spread over them. The channel's curvature it makes,
+    d²ln H/df² = −(2πδ)²·w(1 − w), is the mean over the same (with its variance): the share of a measured
+    bend (``WholeFrameFit.curvature_s2``) the image explains. All 0 when the image is resolved or the
+    geometry is not given.
 
     Examples
     --------
@@ -256,14 +271,14 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     waves move it by ±1.6 µs):
 
     >>> from seamodem import get_preset
-    >>> bias, sigma = merged_image_bias_s(800.0, 3.0, 3.0, config=get_preset("jmse2024"), sound_speed_mps=1500.0)
-    >>> round(bias * 1e6, 1), round(sigma * 1e6, 1)  # [µs]
+    >>> image = merged_image_bias_s(800.0, 3.0, 3.0, config=get_preset("jmse2024"), sound_speed_mps=1500.0)
+    >>> round(image.bias_s * 1e6, 1), round(image.sigma_s * 1e6, 1)  # [µs]
     (7.0, 2.0)
     """
     delta = merged_image_delay_s(range_m, beacon_depth_m, vehicle_depth_m, config=config,
                                  sound_speed_mps=sound_speed_mps)
     if not delta > 0:
-        return 0.0, 0.0
+        return MergedImage(0.0, 0.0, 0j, 0.0)
     c, f0 = sound_speed_mps, config.carrier_hz
     # the image's path moves with the surface where it reflects, by ±2·a·sin θ (the waves: uniform over it),
     # and δ ∝ z_b·z_v with the depths' error, by δ·σ_z·√(1/z_b² + 1/z_v²) (two σ each way); its carrier
@@ -291,7 +306,11 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     den = ym - 2 * y0 + yp
     step = np.where(den < 0, 0.5 * (ym - yp) / np.where(den < 0, den, -1.0), 0.0)
     peaks = taus[i] + np.clip(step, -0.5, 0.5) * (taus[1] - taus[0])
-    return float(np.mean(peaks)), float(np.std(peaks))
+    w = z / (1 + z)
+    curvature = -(lags**2) * w * (1 - w)
+    mean = complex(np.mean(curvature))
+    return MergedImage(float(np.mean(peaks)), float(np.std(peaks)), mean,
+                       float(np.mean(np.abs(curvature - mean) ** 2)))
 
 
 #: the direct path's κ (``joint_delay_inflation``) beyond which other fitted paths couple to its arrival, and
@@ -439,11 +458,14 @@ class _CurvaturePool(_FramePool):
         super().__init__()
         self._bends: collections.deque[tuple[complex, float]] = collections.deque(maxlen=CURVATURE_POOL_FRAMES)
 
-    def add_fit(self, wf: WholeFrameFit, first: int) -> None:
-        """Pool the fit's direct-path curvature (``wf.curvature_*``; nothing when it has none)."""
+    def add_fit(self, wf: WholeFrameFit, first: int, image: MergedImage | None = None) -> None:
+        """Pool the fit's direct-path curvature (``wf.curvature_*``; nothing when it has none), less the bend
+        of a surface image whose bias is taken out (``image``), whose variance adds to the noise's."""
         if wf.curvature_s2 is None:
             return
         bend, noise = complex(wf.curvature_s2[first]), float(wf.curvature_noise_s4[first])
+        if image is not None:
+            bend, noise = bend - image.curvature_s2, noise + image.curvature_var_s4
         self.add(abs(bend) ** 2 - noise, noise)
         if cmath.isfinite(bend) and math.isfinite(noise) and noise > 0:
             self._bends.append((bend, noise))
@@ -476,7 +498,8 @@ _K_FADE, _K_ACCEL, _K_MERGE = 1.0, 1.0, 1.0
 
 
 def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sound_speed_mps: float,
-                      pooled_amp_rate_hz: float = 0.0, pooled_merge_delay_s: float = 0.0) -> tuple[float, float]:
+                      pooled_amp_rate_hz: float = 0.0, pooled_merge_delay_s: float = 0.0,
+                      image: MergedImage | None = None) -> tuple[float, float]:
     """σ terms [m/s], [s] of what the whole-frame fit of a path shows but does not model.
 
     Parameters
@@ -517,15 +540,22 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
     drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
     # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
     sigma_v = math.hypot(fade, drift)
-    return sigma_v, math.hypot(channel_shape_delay_s(wf, first, pooled_merge_delay_s),
+    return sigma_v, math.hypot(channel_shape_delay_s(wf, first, pooled_merge_delay_s, image),
                                time_scale_delay_s(sigma_v, config, sound_speed_mps=c))
 
 
-def channel_shape_delay_s(wf: WholeFrameFit, first: int, pooled_merge_delay_s: float = 0.0) -> float:
+def channel_shape_delay_s(wf: WholeFrameFit, first: int, pooled_merge_delay_s: float = 0.0,
+                          image: MergedImage | None = None) -> float:
     """σ [s] of the direct path's arrival from its channel's shape (a merged echo): the larger of the fit's
     ``tilt_delay_s`` and ``pooled_merge_delay_s``. The pilot's arrival sees the same channel, so this
-    bias is common to both arrivals (not in their gap)."""
+    bias is common to both arrivals (not in their gap). With a surface image whose bias is taken out
+    (``image``), the fit's tilt is that of its curvature less the image's, beyond 3 of its noise σ (the
+    image's variance added) as the fit's own."""
     tilt = 0.0 if wf.tilt_delay_s is None else float(wf.tilt_delay_s[first])
+    if image is not None and wf.curvature_s2 is not None:
+        rest = abs(complex(wf.curvature_s2[first]) - image.curvature_s2) ** 2 - 9 * (
+            float(wf.curvature_noise_s4[first]) + image.curvature_var_s4)
+        tilt = max(rest, 0.0) ** 0.25 / math.sqrt(3) if math.isfinite(rest) else tilt
     return _K_MERGE * max(tilt, pooled_merge_delay_s)
 
 
@@ -948,7 +978,6 @@ class FrameMeasurer:
         unmodelled = doppler.pop("sigma_tau_unmodelled", 0.0)
         sigma_tau = math.hypot(sigma_tau, unmodelled)
         shape_used = unmodelled  # without a fit: the pooled bend, or a set-aside fit's terms (the larger)
-        shape_var = unmodelled**2  # the channel shape's share of the arrival's variance
         kappa = 1.0  # the whole-frame fit's direct path's κ (joint_delay_inflation), when it has one
         sigma_first = earlier_path_gap_s(m)
         # the direct path's data-aided arrival over the frame, when decoded. Not on decisions: they were taken
@@ -971,22 +1000,19 @@ class FrameMeasurer:
             if doppler["v_r_source"] == "whole_frame":
                 t_arr, sigma_tau = t_fit, sigma_fit
                 noise_tau = sigma_fit
-                shape_var = 0.0
             sigma_tau = math.sqrt(sigma_tau**2 + sigma_shape**2 + max(0.0, excess))
             shape_used = sigma_shape
-            shape_var += sigma_shape**2
         sigma_tau = math.hypot(sigma_tau, sigma_first)
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
-            if s.beacon_depth_m is not None and s.vehicle_depth_m is not None:
-                # the ends' depths give the surface image and its phase: a merged one's bias on the arrival
-                # is taken out, and its σ (the phase and reflection not known) is the channel shape's in place
-                # of the bend's bound, which it explains (the corpus's far family: ranges 5–19 mm long, 0.4–0.47
-                # of the image's delay, as predicted)
-                bias, spread = merged_image_bias_s(c * tof, s.beacon_depth_m, s.vehicle_depth_m, config=self.config,
-                                                   sound_speed_mps=c)
-                # how much the paths fitted around the direct one move its arrival: the pilot's fit's, and
-                # the whole frame's (a fit on decisions too: its paths are there for the pilot's arrival)
+            image = self.merged_image(c * tof)
+            if image is not None:
+                # the ends' depths give the surface image and its phase: a merged one's bias on the arrival is
+                # taken out, with its σ (the phase and reflection not known); the channel bend it makes was
+                # not counted in the channel shape's σ (merged_image). The corpus's far family: ranges 5–19 mm
+                # long, 0.4–0.47 of the image's delay, as predicted. How much the paths fitted around the
+                # direct one move its arrival: the pilot's fit's, and the whole frame's (a fit on decisions
+                # too: its paths are there for the pilot's arrival)
                 if len(m.paths.delays_s) > 1:
                     kappa = max(kappa, float(joint_delay_inflation(m.paths.delays_s, m.paths.amplitudes,
                                                                    config=self.config)[
@@ -996,10 +1022,9 @@ class FrameMeasurer:
                     # too, which the image alone does not predict: the image's delay is the honest scale
                     sigma_tau = math.hypot(sigma_tau, merged_image_delay_s(
                         c * tof, s.beacon_depth_m, s.vehicle_depth_m, config=self.config, sound_speed_mps=c))
-                elif bias != 0.0 or spread > 0.0:
-                    t_arr, tof = t_arr - bias, tof - bias
-                    sigma_tau = math.sqrt(max(0.0, sigma_tau**2 - shape_var) + spread**2)
-                    shape_used = math.inf  # the image modelled: a later bend pooled is its too
+                else:
+                    t_arr, tof = t_arr - image.bias_s, tof - image.bias_s
+                    sigma_tau = math.hypot(sigma_tau, image.sigma_s)
         else:
             tof = float(two_way_range_m(t_emit, t_arr, turnaround_s=s.turnaround_s, sound_speed_mps=1.0))
             sigma_tau /= 2  # the reply's arrival is the only measured time; the poll's emission is known
@@ -1031,13 +1056,25 @@ class FrameMeasurer:
         start = m.pilot.t_start_s
         return self.blanker.blanked_fraction(int(start * fs), int((start + self.config.frame_duration_s) * fs))
 
+    def merged_image(self, range_m: float) -> MergedImage | None:
+        """The surface image merged with the direct path at ``range_m`` (one-way, the ends' depths given), whose
+        bias is taken out of the arrival (:func:`merged_image_bias_s`); None without one."""
+        s = self.settings
+        if s.turnaround_s is not None or s.beacon_depth_m is None or s.vehicle_depth_m is None:
+            return None
+        image = merged_image_bias_s(range_m, s.beacon_depth_m, s.vehicle_depth_m, config=self.config,
+                                    sound_speed_mps=s.sound_speed_mps)
+        return image if image.bias_s != 0.0 or image.sigma_s > 0.0 else None
+
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
                  excess: float, snr_direct_db: float, range_m: float = math.nan
-                 ) -> tuple[dict, tuple[float, float, float] | None]:
+                 ) -> tuple[dict, tuple[float, float, float, float] | None]:
         """v_r_mps, its σ and source (and the bank's σ, ``sigma_bank``): the direct path's whole-frame Doppler
         when decoded, else the tone ML; and (arrival [s], its σ [s], the channel shape's σ [s], which the
-        pilot's arrival shares: ``channel_shape_delay_s``) of the direct path from the whole-frame fit, or
-        None. ``range_m`` (nan when unknown) takes the spreading out of the frames' amplitude change.
+        pilot's arrival shares: ``channel_shape_delay_s``; the direct path's κ with the ends' depths, else 1)
+        of the direct path from the whole-frame fit, or None. ``range_m`` (nan when unknown) takes the
+        spreading out of the frames' amplitude change, and gives a merged surface image with the depths
+        (:meth:`merged_image`): the channel bend it explains is not counted.
 
         The tone sums every path; it is flagged as multipath-biased when it and
         the direct path's own estimate (whole-frame fit, else the pilot bank)
@@ -1053,6 +1090,7 @@ class FrameMeasurer:
         """
         c = self.settings.sound_speed_mps
         v_tone = m.v_tone_ml_mps
+        image = self.merged_image(range_m)
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
         sigma_tone_noise = sigma_tone  # the two-carrier check's: lines and wander are what it measures
@@ -1077,7 +1115,7 @@ class FrameMeasurer:
             # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
-            self._curvature_pool.add_fit(fit[0], fit[1])
+            self._curvature_pool.add_fit(fit[0], fit[1], image)
             echoes = fit_echoes(fit[0], fit[1])
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
@@ -1124,7 +1162,7 @@ class FrameMeasurer:
         sigma_tau_rejected = 0.0
         if rejected is not None:
             sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c,
-                                                   pooled_merge_delay_s=pooled_merge)[1]
+                                                   pooled_merge_delay_s=pooled_merge, image=image)[1]
             # two independent estimates of the same speed further apart than 3 combined σ: one of them is
             # wrong and the frame does not say which, so the one used (the tone) has a σ that covers the gap
             gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
@@ -1141,7 +1179,8 @@ class FrameMeasurer:
                 self._frame_to_frame(wf, first, range_m)
             pooled_rate = self.pooled_fade_rate_hz
             sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
-                                              pooled_amp_rate_hz=pooled_rate, pooled_merge_delay_s=pooled_merge)
+                                              pooled_amp_rate_hz=pooled_rate, pooled_merge_delay_s=pooled_merge,
+                                              image=image)
             own_rate = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
             sigma = math.hypot(sigma, sigma_v_un)
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
@@ -1158,7 +1197,7 @@ class FrameMeasurer:
             # instants), and apart from it the channel shape's, which the pilot's arrival shares
             sigma_tau_fit = math.hypot(float(wf.sigma_delay_s[first]) * inflation, time_scale_delay_s(
                 math.hypot(sigma_v_un, sigma_2c), self.config, sound_speed_mps=c))
-            shape = channel_shape_delay_s(wf, first, pooled_merge)
+            shape = channel_shape_delay_s(wf, first, pooled_merge, image)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, sigma_tau_pilot_pull=pilot_pull,
                         pilot_excess=pilot_excess,

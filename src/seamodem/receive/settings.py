@@ -85,7 +85,8 @@ class ReceiverSettings:
         is known too, and so is the bias (0.4–0.47 of the delay for most
         phases): it is taken out of the arrival, whose σ then covers the
         phase and reflection not known (waves, the depths' error:
-        :func:`~seamodem.receive.frame.merged_image_bias_s`). Where another
+        :func:`~seamodem.receive.frame.merged_image_bias_s`), and the
+        channel bend it makes is not counted again. Where another
         fitted path couples to the direct one, the delay is the arrival's σ
         (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without the
         depths the σ cannot cover that bias (docs/receiver.md).
