@@ -202,7 +202,7 @@ def test_the_predicted_bias_is_the_closed_form_of_a_weak_merge():
     r = 2 * zb * zv / (C * 0.5 / CFG.carrier_hz)
     delta = merged_image_delay_s(r, zb, zv, config=CFG, sound_speed_mps=C)
     assert CFG.carrier_hz * delta == pytest.approx(0.5, abs=0.01)
-    bias, sigma, _, _ = merged_image_bias_s(r, zb, zv, config=CFG, sound_speed_mps=C)
+    bias, sigma = merged_image_bias_s(r, zb, zv, config=CFG, sound_speed_mps=C)[:2]
     # the closed form Re(w)·δ' (the group delay, not the matched filter's peak) over a fine grid of what is
     # not known: the waves move the image's path by ±2·a·sin θ (its delay and phase together), the depths'
     # error δ ∝ z_b·z_v by two of its σ, and ρ
@@ -226,8 +226,9 @@ def test_near_the_null_the_prediction_says_it_does_not_know():
     sigma = merged_image_bias_s(r, zb, zb, config=CFG, sound_speed_mps=C).sigma_s
     assert sigma > 0.5 * delta
     # a resolved image, or no geometry: nothing predicted
-    assert merged_image_bias_s(300.0, 10.0, 10.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0, 0j, 0.0)
-    assert merged_image_bias_s(float("nan"), 3.0, 3.0, config=CFG, sound_speed_mps=C) == (0.0, 0.0, 0j, 0.0)
+    for none in (merged_image_bias_s(300.0, 10.0, 10.0, config=CFG, sound_speed_mps=C),
+                 merged_image_bias_s(float("nan"), 3.0, 3.0, config=CFG, sound_speed_mps=C)):
+        assert none.bias_s == none.sigma_s == none.re_w == none.wave_doppler_mps == 0.0
 
 
 def test_with_the_depths_the_merged_image_is_taken_out_of_the_range():
@@ -277,3 +278,23 @@ def test_the_bend_a_taken_out_image_explains_is_not_counted_again():
     fit.curvature_s2 = np.array([image.curvature_s2 + 1e-9])
     assert channel_shape_delay_s(fit, 0, image=image) == pytest.approx(
         (1e-18 - 9 * 2 * noise) ** 0.25 / np.sqrt(3), rel=1e-9)
+
+
+def test_an_image_adding_to_the_path_moves_the_phase_where_the_amplitude_stays_flat():
+    from seamodem.receive.frame import MergedImage, image_doppler_sigma_mps
+
+    to_mps = C / (2 * np.pi * CFG.carrier_hz)
+    # w = 0.49 + 0.02j (f₀δ ≈ ½): a Doppler Δv of the image moves the phase rate by 0.49·Δv and the
+    # log-amplitude rate by 0.02·Δv. The fading term reads the amplitude's 0.02·Δv as a phase rate; the
+    # image's term brings it to 0.49·Δv, up to what the waves can give (0.49 × 11 mm/s)
+    image = MergedImage(7e-6, 2e-6, 0j, 0.0, re_w=0.49, im_w=0.02, wave_doppler_mps=0.011)
+    dv = 0.004  # [m/s]
+    amp_rate = 0.02 * dv / to_mps
+    got = image_doppler_sigma_mps(image, amp_rate, CFG, sound_speed_mps=C)
+    assert np.hypot(got, 0.02 * dv) == pytest.approx(0.49 * dv, rel=1e-9)
+    # a faster amplitude than the waves allow: the waves' bound
+    got = image_doppler_sigma_mps(image, 100 * amp_rate, CFG, sound_speed_mps=C)
+    assert np.hypot(got, 2 * dv) == pytest.approx(max(0.49 * 0.011, 2 * dv), rel=1e-9)
+    # w nearly imaginary: the amplitude shows the image's Doppler at least as much as the phase, nothing to add
+    image = MergedImage(7e-6, 2e-6, 0j, 0.0, re_w=0.1, im_w=0.5, wave_doppler_mps=0.011)
+    assert image_doppler_sigma_mps(image, amp_rate, CFG, sound_speed_mps=C) == 0.0
