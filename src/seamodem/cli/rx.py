@@ -69,7 +69,8 @@ def add_parser(sub) -> None:
                                "recording's [water] profile from its sidecar)")
     g.add_argument("--beacon-depth", type=float, metavar="M",
                    help="beacon depth [m]: the ray's end with --sound-speed-profile; with --vehicle-depth, also (alone "
-                        "too) the arrival's σ term for a surface image merged with the direct path")
+                        "too) a surface image merged with the direct path: its bias on the arrival predicted and "
+                        "taken out, the σ what the waves and the reflection leave of it")
     g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m] (as --beacon-depth)")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
