@@ -90,3 +90,27 @@ def test_the_depths_without_any_profile_give_the_merged_image(beacon, tmp_path):
         assert 1500.0 * spread <= d.sigma_range_m <= np.hypot(r.sigma_range_m, 1500.0 * spread) * (1 + 1e-9)
         # this recording has no surface image: the shift for one is within the σ it brings
         assert abs(d.range_m - r.range_m) <= d.sigma_range_m
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--wave-amplitude", "-1"], "wave_amplitude"),
+    (["--wave-period", "0"], "wave_period"),
+])
+def test_an_impossible_sea_is_a_one_line_error(beacon, tmp_path, capsys, extra, words):
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(beacon[2]), "-o", str(out), "-q", "--beacon-depth", "2", "--vehicle-depth", "3"] + extra) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and words in err and not out.exists()
+
+
+def test_a_calm_sea_narrows_the_merged_images_sigma(beacon, tmp_path):
+    # the sea state is the header's, and a calmer one gives the image's spread (range) a smaller σ
+    rough, calm = tmp_path / "rough.csv", tmp_path / "calm.csv"
+    depths = ["--beacon-depth", "2", "--vehicle-depth", "3"]
+    assert main(["rx", str(beacon[2]), "-o", str(rough), "-q"] + depths) == 0
+    assert main(["rx", str(beacon[2]), "-o", str(calm), "-q", "--wave-amplitude", "0.1", "--wave-period", "6"]
+                + depths) == 0
+    (r_recs, r_head), (c_recs, c_head) = read_measurements(rough), read_measurements(calm)
+    assert r_head["wave_amplitude_m"] == 0.5 and c_head["wave_amplitude_m"] == 0.1
+    assert c_head["wave_period_s"] == 6.0
+    assert all(c.sigma_range_m < r.sigma_range_m for r, c in zip(r_recs, c_recs, strict=True))

@@ -72,6 +72,11 @@ def add_parser(sub) -> None:
                         "too) a surface image merged with the direct path: its bias on the arrival predicted and "
                         "taken out, the σ what the waves and the reflection leave of it")
     g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m] (as --beacon-depth)")
+    g.add_argument("--wave-amplitude", type=float, default=0.5, metavar="M",
+                   help="with the depths: the waves' amplitude [m] (half their height) that the merged surface "
+                        "image rides, in its σ's")
+    g.add_argument("--wave-period", type=float, default=3.0, metavar="S",
+                   help="with the depths: the waves' shortest period [s]")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
         "--turnaround",
@@ -258,6 +263,8 @@ def _settings(args, sidecar: dict | None, profile=None):
         # the depths give the arrival's σ its merged-surface-image term (with or without a profile)
         beacon_depth_m=args.beacon_depth,
         vehicle_depth_m=args.vehicle_depth,
+        wave_amplitude_m=getattr(args, "wave_amplitude", 0.5),
+        wave_period_s=getattr(args, "wave_period", 3.0),
         **({} if getattr(args, "lookahead", None) is None else {"lookahead_frames": args.lookahead}),
     ), origin
 

@@ -230,11 +230,12 @@ def merged_image_delay_s(range_m: float, beacon_depth_m: float, vehicle_depth_m:
 #: loss exp(−2(k·h·sin θ)²) of 0.1–0.5 m waves at the angles where the image merges (sin θ < 0.02) is
 #: below 20 %
 SURFACE_REFLECTION = (0.8, 0.98)
-#: surface elevation [m] the image's phase rides (waves of this amplitude; sea state 3), and the ends'
-#: depths' σ [m] (a pressure sensor, a surveyed mooring): both spread the image's carrier phase
+#: surface elevation [m] the image's phase rides by default (waves of this amplitude; sea state 3:
+#: ``ReceiverSettings.wave_amplitude_m``), and the ends' depths' σ [m] (a pressure sensor, a surveyed
+#: mooring): both spread the image's carrier phase
 WAVE_AMPLITUDE_M, DEPTH_SIGMA_M = 0.5, 0.1
-#: the shortest period of waves that high [s] (steepness 0.07, a wind sea): the surface's vertical speed,
-#: 2π·a/T, moves the image's Doppler
+#: the shortest period of waves that high [s] by default (steepness 0.07, a wind sea:
+#: ``ReceiverSettings.wave_period_s``): the surface's vertical speed, 2π·a/T, moves the image's Doppler
 WAVE_PERIOD_S = 3.0
 
 
@@ -259,7 +260,8 @@ class MergedImage(NamedTuple):
 
 
 def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: float, *, config: FrameConfig,
-                        sound_speed_mps: float) -> MergedImage:
+                        sound_speed_mps: float, wave_amplitude_m: float = WAVE_AMPLITUDE_M,
+                        wave_period_s: float = WAVE_PERIOD_S) -> MergedImage:
     """The bias of the direct path's arrival that a merged surface image puts on it, its σ, and the bend
     it gives the channel [s, s, s², s⁴].
 
@@ -270,11 +272,13 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     ρ ≈ 0.9 is +0.4–0.47·δ over most of the phase, and large and early near the null (f₀δ near a whole
     number of cycles, where the two paths cancel). The bias is that peak's mean over what is not known:
     ρ over :data:`SURFACE_REFLECTION`, and the image's delay (and with it its phase) over the waves'
-    ±2·a·sin θ of path (a = :data:`WAVE_AMPLITUDE_M`, θ the grazing angle) and over two σ of the depths'
+    ±2·a·sin θ of path (a = ``wave_amplitude_m``, θ the grazing angle) and over two σ of the depths'
     error (:data:`DEPTH_SIGMA_M`); its σ is the peaks' spread over them. The channel's curvature it makes,
     d²ln H/df² = −(2πδ)²·w(1 − w), is the mean over the same (with its variance): the share of a measured
     bend (``WholeFrameFit.curvature_s2``) the image explains. All 0 when the image is resolved or the
-    geometry is not given.
+    geometry is not given. The waves' amplitude and shortest period (``wave_period_s``) are
+    :class:`~seamodem.receive.settings.ReceiverSettings`'s (default :data:`WAVE_AMPLITUDE_M`, 0.5 m, at
+    :data:`WAVE_PERIOD_S`, 3 s).
 
     Examples
     --------
@@ -295,7 +299,7 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     # and δ ∝ z_b·z_v with the depths' error, by δ·σ_z·√(1/z_b² + 1/z_v²) (two σ each way); its carrier
     # phase 2π·f₀·δ moves with it
     sin_grazing = (beacon_depth_m + vehicle_depth_m) / max(range_m, 1e-9)
-    waves = 2 * WAVE_AMPLITUDE_M * sin_grazing / c
+    waves = 2 * wave_amplitude_m * sin_grazing / c
     depths = 2 * delta * DEPTH_SIGMA_M * math.hypot(1 / max(beacon_depth_m, DEPTH_SIGMA_M),
                                                     1 / max(vehicle_depth_m, DEPTH_SIGMA_M))
     deltas = np.maximum(delta + (waves + depths) * np.linspace(-1.0, 1.0, 13), 0.0)
@@ -320,7 +324,7 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     w = z / (1 + z)
     curvature = -(lags**2) * w * (1 - w)
     mean = complex(np.mean(curvature))
-    wave_speed = 2 * math.pi * WAVE_AMPLITUDE_M / WAVE_PERIOD_S / math.sqrt(2)
+    wave_speed = 2 * math.pi * wave_amplitude_m / wave_period_s / math.sqrt(2)
     z0 = -float(np.mean(SURFACE_REFLECTION)) * cmath.exp(-2j * math.pi * f0 * delta)
     w0 = z0 / (1 + z0)
     return MergedImage(float(np.mean(peaks)), float(np.std(peaks)), mean,
@@ -1100,7 +1104,8 @@ class FrameMeasurer:
         if s.turnaround_s is not None or s.beacon_depth_m is None or s.vehicle_depth_m is None:
             return None
         image = merged_image_bias_s(range_m, s.beacon_depth_m, s.vehicle_depth_m, config=self.config,
-                                    sound_speed_mps=s.sound_speed_mps)
+                                    sound_speed_mps=s.sound_speed_mps, wave_amplitude_m=s.wave_amplitude_m,
+                                    wave_period_s=s.wave_period_s)
         return image if image.bias_s != 0.0 or image.sigma_s > 0.0 else None
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,

@@ -90,6 +90,12 @@ class ReceiverSettings:
         fitted path couples to the direct one, the delay is the arrival's σ
         (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without the
         depths the σ cannot cover that bias (docs/receiver.md).
+    wave_amplitude_m, wave_period_s : float
+        The sea state the merged surface image rides, with the depths: waves
+        of this amplitude [m] (half the height) and no shorter period [s]
+        move the image's path, and with it its bias's spread and the Doppler
+        it gives v_r where the amplitude cannot show it (default 0.5 m at
+        3 s, a wind sea of 1 m; a calm sea's smaller values give smaller σ's).
     lookahead_frames : int
         Frames measured after a record before it is given out: its range σ
         then also covers the channel bend that those later frames show
@@ -122,6 +128,8 @@ class ReceiverSettings:
     front_end_block: int | None = None
     beacon_depth_m: float | None = None
     vehicle_depth_m: float | None = None
+    wave_amplitude_m: float = 0.5
+    wave_period_s: float = 3.0
     lookahead_frames: int = 5
 
     def __post_init__(self):
@@ -145,6 +153,10 @@ class ReceiverSettings:
             if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or not math.isfinite(z)
                                   or z < 0):
                 raise ConfigError(name.removesuffix("_m"), f"must be a depth >= 0 m, got {z!r}")
+        if not (isinstance(self.wave_amplitude_m, (int, float)) and not isinstance(self.wave_amplitude_m, bool)
+                and math.isfinite(self.wave_amplitude_m) and self.wave_amplitude_m >= 0):
+            raise ConfigError("wave_amplitude", f"must be >= 0 m, got {self.wave_amplitude_m!r}")
+        _positive("wave_period", self.wave_period_s)
         n = self.lookahead_frames
         if isinstance(n, bool) or not isinstance(n, int) or n < 0:
             raise ConfigError("lookahead_frames", f"must be an integer >= 0, got {n!r}")
