@@ -2,11 +2,12 @@
 
 Run: ``python benchmarks/diagnose_corpus.py FAMILY SEED`` (a recording's seed, as in the
 ``seed`` column of ``results/bench_corpus_frames.csv``), ``--frames N``, ``--single-path``,
-``--depths``. Prints, per frame: the record's ``v_r_source``, SNR, range and v_r errors against
-the corpus's direct-path truth with their σ and error/σ, and the whole-frame fit's paths (delay
-after the first [µs], |gain| relative to it); then the true paths of the first frame (name, delay
-after the direct path [µs], closing speed [m/s], gain). A diagnosis aid for the rows the corpus
-report flags, not a benchmark: it times nothing and asserts nothing.
+``--depths`` (then also the surface image the receiver took out). Prints, per frame: the record's
+``v_r_source``, SNR, range and v_r errors against the corpus's direct-path truth with their σ and
+error/σ, and the whole-frame fit's paths (delay after the first [µs], |gain| relative to it); then the
+true paths of the first frame (name, delay after the direct path [µs], closing speed [m/s], gain). A
+diagnosis aid for the rows the corpus report flags, not a benchmark: it times nothing and asserts
+nothing.
 """
 
 from __future__ import annotations
@@ -70,6 +71,20 @@ def main(argv=None) -> int:
         print(f"frame {r['frame']} {r['v_r_source']:22s} SNR {r['snr_db']:5.1f} dB | range {er * 1e3:8.2f} mm "
               f"σ {r['sigma_range_m'] * 1e3:7.2f} ({er / r['sigma_range_m']:6.1f}σ) | v_r {ev * 1e3:8.2f} mm/s "
               f"σ {r['sigma_v_r_mps'] * 1e3:7.2f} ({ev / r['sigma_v_r_mps']:5.1f}σ) | paths {r.get('rec_n_paths')}")
+    if args.depths:
+        # what the receiver made of the surface image from the ends' depths, at the first detected frame's range
+        from seamodem import get_preset
+
+        first = next((r for r in rows if r["detected"]), None)
+        if first is not None:
+            cfg = get_preset("jmse2024")
+            zb, zv = float(-sc.beacon[2]), float(-sc.track["z"])
+            delta = frame.merged_image_delay_s(first["range_m"], zb, zv, config=cfg, sound_speed_mps=corpus.C)
+            image = frame.merged_image_bias_s(first["range_m"], zb, zv, config=cfg, sound_speed_mps=corpus.C)
+            print(f"surface image from the depths ({zb:.2f} m, {zv:.2f} m): δ {delta * 1e6:.1f} µs "
+                  f"(f₀δ {cfg.carrier_hz * delta:.2f} cycles), bias taken out {image.bias_s * corpus.C * 1e3:.2f} mm "
+                  f"σ {image.sigma_s * corpus.C * 1e3:.2f} mm, |Re w| {image.re_w:.2f} |Im w| {image.im_w:.2f} "
+                  f"(0 when resolved); the corpus's waves {sc.wave_amp_m:.2f} m / {sc.wave_period_s:.1f} s")
     print("whole-frame fits (delay after the first [µs], |gain| relative to it):")
     for fit in fits:
         d = np.asarray(fit.delays_s)
