@@ -41,7 +41,8 @@ from .multipath import find_echoes, sidelobe_pull_s
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .two_way import two_way_range_m
-from .wholeframe import WholeFrameFit, fit_whole_frame, joint_delay_inflation, joint_delay_sigma_s
+from .wholeframe import (WholeFrameFit, fit_whole_frame, joint_delay_inflation, joint_delay_sigma_s,
+                         srrc_spectrum)
 
 __all__ = [
     "BasebandBuffers",
@@ -257,6 +258,8 @@ class MergedImage(NamedTuple):
     #: the image's Doppler relative to the direct path's that the waves can give it, RMS [m/s]: 2·sin θ times
     #: the surface's vertical speed (:data:`WAVE_AMPLITUDE_M` at :data:`WAVE_PERIOD_S`, 0.74 m/s RMS)
     wave_doppler_mps: float = 0.0
+    #: the image's extra delay δ at the geometry [s] (:func:`merged_image_delay_s`; 0: no merged image)
+    delay_s: float = 0.0
 
 
 def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: float, *, config: FrameConfig,
@@ -306,10 +309,9 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     rho = np.linspace(*SURFACE_REFLECTION, 3)
     z = -(rho[:, None] * np.exp(-2j * np.pi * f0 * deltas[None, :])).ravel()
     lags = np.broadcast_to(deltas[None, :], (len(rho), len(deltas))).ravel()
-    rs = config.symbol_rate_hz
+    rs, period = config.symbol_rate_hz, config.symbol_period_s
     f = np.linspace(-(1 + config.rolloff) * rs / 2, (1 + config.rolloff) * rs / 2, 161)
-    edge = np.clip((np.abs(f) - (1 - config.rolloff) * rs / 2) / (config.rolloff * rs), 0.0, 1.0)
-    rc = 0.5 * (1 + np.cos(np.pi * edge))
+    rc = srrc_spectrum(f, period, float(config.rolloff)) ** 2 / period  # pulse × matched filter, peak 1
     # the matched filter's output around the paths, for every (ρ, phase): its peak on a grid, then a parabola
     reach = 2 * float(np.max(deltas)) + 10e-6
     taus = np.linspace(-reach, reach, 241)
@@ -330,7 +332,7 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     return MergedImage(float(np.mean(peaks)), float(np.std(peaks)), mean,
                        float(np.mean(np.abs(curvature - mean) ** 2)),
                        re_w=abs(w0.real), im_w=abs(w0.imag),
-                       wave_doppler_mps=2 * sin_grazing * wave_speed)
+                       wave_doppler_mps=2 * sin_grazing * wave_speed, delay_s=delta)
 
 
 #: the direct path's κ (``joint_delay_inflation``) beyond which other fitted paths couple to its arrival, and
@@ -338,11 +340,13 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
 _IMAGE_ALONE_KAPPA = 1.05
 
 
-def direct_path_kappa(wf: WholeFrameFit, first: int, config: FrameConfig, sound_speed_mps: float) -> float:
-    """κ ≥ 1 of the fit's direct path (``joint_delay_inflation``): 1 when no other path couples to it."""
-    if len(wf.delays_s) < 2:
+def direct_path_kappa(delays_s, amplitudes, first: int, config: FrameConfig, *, v_mps=None,
+                      sound_speed_mps: float = 1500.0) -> float:
+    """κ ≥ 1 of the direct path ``first`` among fitted paths (``joint_delay_inflation``; a whole-frame fit's,
+    with its Doppler, or the pilot's): 1 when no other path couples to it."""
+    if len(delays_s) < 2:
         return 1.0
-    return float(joint_delay_inflation(wf.delays_s, wf.amplitudes, config=config, v_mps=wf.v_mps,
+    return float(joint_delay_inflation(delays_s, amplitudes, config=config, v_mps=v_mps,
                                        sound_speed_mps=sound_speed_mps)[first])
 
 
@@ -990,10 +994,11 @@ class FrameMeasurer:
         sigma_tau = float(delay_crlb_s(self.config, snr_direct_db)) * math.sqrt(excess)
         # the pilot fitted its paths together: an echo within the pulse's width trades its gain against the
         # arrival (an echo 0.3 at 100 µs: σ × 1.7–4)
+        pilot_first = int(np.argmin(np.abs(np.asarray(m.paths.delays_s) - m.paths.first_s))) \
+            if len(m.paths.delays_s) > 1 else 0
         if len(m.paths.delays_s) > 1:
-            first = int(np.argmin(np.abs(np.asarray(m.paths.delays_s) - m.paths.first_s)))
             sigma_tau = float(joint_delay_sigma_s(np.full(len(m.paths.delays_s), sigma_tau), m.paths.delays_s,
-                                                  m.paths.amplitudes, config=self.config)[first])
+                                                  m.paths.amplitudes, config=self.config)[pilot_first])
         sent = None
         if self.payloads is not None and 0 <= k < len(self.payloads):
             sent = self.payloads[k]
@@ -1054,15 +1059,11 @@ class FrameMeasurer:
                 # long, 0.4–0.47 of the image's delay, as predicted. How much the paths fitted around the
                 # direct one move its arrival: the pilot's fit's, and the whole frame's (a fit on decisions
                 # too: its paths are there for the pilot's arrival)
-                if len(m.paths.delays_s) > 1:
-                    kappa = max(kappa, float(joint_delay_inflation(m.paths.delays_s, m.paths.amplitudes,
-                                                                   config=self.config)[
-                        int(np.argmin(np.abs(np.asarray(m.paths.delays_s) - m.paths.first_s)))]))
+                kappa = max(kappa, direct_path_kappa(m.paths.delays_s, m.paths.amplitudes, pilot_first, self.config))
                 if kappa > _IMAGE_ALONE_KAPPA:
                     # another path fitted within the pulse's width (a merged bottom image) moves the arrival
                     # too, which the image alone does not predict: the image's delay is the honest scale
-                    sigma_tau = math.hypot(sigma_tau, merged_image_delay_s(
-                        c * tof, s.beacon_depth_m, s.vehicle_depth_m, config=self.config, sound_speed_mps=c))
+                    sigma_tau = math.hypot(sigma_tau, image.delay_s)
                 else:
                     t_arr, tof = t_arr - image.bias_s, tof - image.bias_s
                     sigma_tau = math.hypot(sigma_tau, image.sigma_s)
@@ -1106,7 +1107,7 @@ class FrameMeasurer:
         image = merged_image_bias_s(range_m, s.beacon_depth_m, s.vehicle_depth_m, config=self.config,
                                     sound_speed_mps=s.sound_speed_mps, wave_amplitude_m=s.wave_amplitude_m,
                                     wave_period_s=s.wave_period_s)
-        return image if image.bias_s != 0.0 or image.sigma_s > 0.0 else None
+        return image if image.delay_s > 0 else None
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
                  excess: float, snr_direct_db: float, range_m: float = math.nan
@@ -1252,7 +1253,8 @@ class FrameMeasurer:
                         v_r_drift_mps2=float(wf.accel_mps2[first]),
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate))), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape,
-                 direct_path_kappa(wf, first, self.config, c) if self.settings.beacon_depth_m is not None else 1.0)
+                 direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
+                 if self.settings.beacon_depth_m is not None else 1.0)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank

@@ -29,6 +29,11 @@ def _positive(name: str, value) -> None:
         raise ConfigError(name, f"must be a positive number, got {value!r}")
 
 
+def _non_negative(name: str, value, what: str) -> None:
+    if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+        raise ConfigError(name, f"must be {what}, got {value!r}")
+
+
 @dataclass(frozen=True, kw_only=True)
 class ReceiverSettings:
     """How a recording is received: built once (CLI, batch, sweeps, demo) and passed down.
@@ -149,13 +154,9 @@ class ReceiverSettings:
         if b is not None and (isinstance(b, bool) or not isinstance(b, int) or b < 1024):
             raise ConfigError("front_end_block", f"must be an integer >= 1024 samples, got {b!r}")
         for name in ("beacon_depth_m", "vehicle_depth_m"):
-            z = getattr(self, name)
-            if z is not None and (isinstance(z, bool) or not isinstance(z, (int, float)) or not math.isfinite(z)
-                                  or z < 0):
-                raise ConfigError(name.removesuffix("_m"), f"must be a depth >= 0 m, got {z!r}")
-        if not (isinstance(self.wave_amplitude_m, (int, float)) and not isinstance(self.wave_amplitude_m, bool)
-                and math.isfinite(self.wave_amplitude_m) and self.wave_amplitude_m >= 0):
-            raise ConfigError("wave_amplitude", f"must be >= 0 m, got {self.wave_amplitude_m!r}")
+            if getattr(self, name) is not None:
+                _non_negative(name.removesuffix("_m"), getattr(self, name), "a depth >= 0 m")
+        _non_negative("wave_amplitude", self.wave_amplitude_m, ">= 0 m")
         _positive("wave_period", self.wave_period_s)
         n = self.lookahead_frames
         if isinstance(n, bool) or not isinstance(n, int) or n < 0:

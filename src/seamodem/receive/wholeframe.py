@@ -328,7 +328,7 @@ _N_BANDS = 4
 _TAPS = np.arange(-2, 4)  # the interpolator's sample offsets around a position
 
 
-def _srrc_spectrum(f_hz: np.ndarray, period_s: float, rolloff: float) -> np.ndarray:
+def srrc_spectrum(f_hz: np.ndarray, period_s: float, rolloff: float) -> np.ndarray:
     """H(f) = √T·S(fT) of the unit-energy SRRC pulse h of symbol period T (S: 1 in the flat band, cosine roll-off)."""
     nu = np.abs(f_hz) * period_s
     lo = (1 - rolloff) / 2
@@ -408,7 +408,7 @@ class FrameSegment:
     """FFT-domain SRRC matched filter and synthesis on one stretch of baseband.
 
     The SRRC is band-limited below fs/2, so with h the unit-energy pulse of
-    period T' (spectrum :func:`_srrc_spectrum`, time scale exact):
+    period T' (spectrum :func:`srrc_spectrum`, time scale exact):
 
     - matched filter: c(t) = ∫ r(u) h(u − t) du is IFFT(R·H) on the grid,
       zero-padded to ``_UPSAMPLE``·fs and read at t_k; y_k = c(t_k)/√T', so that
@@ -440,7 +440,7 @@ class FrameSegment:
 
     def _pulse(self, scale: float) -> tuple[float, np.ndarray]:
         period = self.config.symbol_period_s / scale
-        return period, _srrc_spectrum(self.band_hz, period, float(self.config.rolloff))
+        return period, srrc_spectrum(self.band_hz, period, float(self.config.rolloff))
 
     def filter(self, r: np.ndarray, instants_s: np.ndarray, *, scale: float, offset_hz: float, t_ref_s: float,
                derivative: bool = False, half: int = 0):
