@@ -114,3 +114,22 @@ def test_a_calm_sea_narrows_the_merged_images_sigma(beacon, tmp_path):
     assert r_head["wave_amplitude_m"] == 0.5 and c_head["wave_amplitude_m"] == 0.1
     assert c_head["wave_period_s"] == 6.0
     assert all(c.sigma_range_m < r.sigma_range_m for r, c in zip(r_recs, c_recs, strict=True))
+
+
+def test_ranges_without_the_depths_note_the_surface_image_they_may_carry(beacon, tmp_path, capsys):
+    # about 300 m: a surface image merges with the direct path for depths whose product is below
+    # R·c/(2B) ≈ 25 m², biasing the range about 0.9·z_b·z_v/R; the note names the products beyond 3σ
+    out = tmp_path / "m.csv"
+    assert main(["rx", str(beacon[2]), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    note = [line for line in printed.splitlines() if line.startswith("note: ranges measured without the ends' depths")]
+    assert len(note) == 1 and "Lloyd's mirror" in note[0]
+    recs, _ = read_measurements(out)
+    r = float(np.median([x.range_m for x in recs]))
+    assert f"median range of {r:.3g} m" in note[0]
+    cfg = get_preset("jmse2024")
+    high = r * 1500.0 / (2 * cfg.symbol_rate_hz * (1 + cfg.rolloff))
+    assert f"-{high:.2g} m²" in note[0]
+    # with the depths the image is taken out: no note
+    assert main(["rx", str(beacon[2]), "-o", str(out), "--beacon-depth", "2", "--vehicle-depth", "3"]) == 0
+    assert "Lloyd's mirror" not in capsys.readouterr().out

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import statistics
 import sys
 import warnings
 from pathlib import Path
@@ -420,7 +421,49 @@ def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) 
             if counted.ber_frames:
                 line += f"; bit error rate {counted.ber_sum / counted.ber_frames:.2e} after decoding"
             print(line)
+        if args.beacon_depth is None or args.vehicle_depth is None:
+            note = lloyd_mirror_note(counted.ranges_m, counted.sigmas_m, inputs.config,
+                                     sound_speed_mps=inputs.settings.sound_speed_mps)
+            if note:
+                print(note)
     return 0
+
+
+#: the shallowest a modem's transducer is taken to be [m] (a hull, a mooring) for :func:`lloyd_mirror_note`
+_SHALLOWEST_END_M = 1.5
+
+
+def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> str:
+    """A note for ranges measured without the ends' depths, or '' when none is due.
+
+    At range R a surface image arrives δ = 2·z_b·z_v/(R·c) after the direct path; below the resolution
+    1/B (z_b·z_v < R·c/(2B)) it merges with it and makes the range about 0.45·δ·c = 0.9·z_b·z_v/R long
+    (docs/receiver.md), unseen at the SNRs where the channel's curvature stays within its noise. With
+    the depths it is taken out (``--beacon-depth``, ``--vehicle-depth``); without them the note says for
+    which depth products that bias exceeds 3 of the median σ, when there are any.
+
+    >>> from seamodem import get_preset
+    >>> print(lloyd_mirror_note([900.0], [0.001], get_preset("jmse2024"), sound_speed_mps=1500.0))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth): at the median range of
+    900 m, a surface image merged with the direct path (Lloyd's mirror) makes the range about 0.9·z_b·z_v/R
+    long, beyond 3 of the median σ (1 mm) for depths whose product is 3-75 m² (both ends 1.7-8.7 m
+    deep), and the σ does not include it (docs/receiver.md)
+    >>> lloyd_mirror_note([15.0], [0.001], get_preset("jmse2024"), sound_speed_mps=1500.0)
+    ''
+    """
+    if not ranges_m:
+        return ""
+    r, s = statistics.median(ranges_m), statistics.median(sigmas_m)
+    bandwidth = config.symbol_rate_hz * (1 + config.rolloff)
+    low, high = max(3 * s * r / 0.9, _SHALLOWEST_END_M**2), r * sound_speed_mps / (2 * bandwidth)
+    if not low < high:
+        return ""
+    return (f"note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth): at the median range "
+            f"of {r:.3g} m, a surface image merged with the direct path (Lloyd's mirror) makes the range about "
+            f"0.9·z_b·z_v/R long, beyond 3 of the median σ ({s * 1e3:.2g} mm) for depths whose product is "
+            f"{low:.2g}-{high:.2g} m² (both ends {math.sqrt(low):.2g}-{math.sqrt(high):.2g} m deep), and the σ "
+            "does not include it (docs/receiver.md)")
 
 
 def _along_the_ray(records, inputs: _Inputs, args):
@@ -519,6 +562,8 @@ class _Counted:
         self.decoded = self.crc_ok = self.ber_frames = 0
         self.ber_sum = 0.0
         self.unmatched: list[float] = []
+        self.ranges_m: list[float] = []
+        self.sigmas_m: list[float] = []
 
     def __iter__(self):
         from ..receive.records import is_matched
@@ -528,6 +573,9 @@ class _Counted:
                 self.unmatched.append(rec.t_arrival_s)
                 yield rec  # left out of the file, and listed in its sidecar, by write_measurements
                 continue
+            if math.isfinite(rec.range_m) and math.isfinite(rec.sigma_range_m):
+                self.ranges_m.append(rec.range_m)
+                self.sigmas_m.append(rec.sigma_range_m)
             if rec.crc_ok is not None:
                 self.decoded += 1
                 self.crc_ok += int(rec.crc_ok)
