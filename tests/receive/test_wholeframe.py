@@ -178,3 +178,26 @@ def test_blanker_leaves_white_noise_and_a_frame_onset_alone():
     s = received_frame(FRAME, t, t_arrival_s=0.1003) + awgn_sigma(CFG, 40.0) * rng.standard_normal(len(t))
     _, fraction = blank_impulses(s)
     assert fraction == 0.0
+
+
+def test_decisions_collapsed_to_one_symbol_leave_no_curvature_and_no_warning():
+    # an equaliser stuck on one output decides every data symbol alike: the reference's spectrum is then a
+    # line at 0 Hz holding most of its energy, and two of the four equal-energy sub-bands get none (a
+    # corpus recording hit it: log(0) warnings and a NaN bend). The fit still runs; the curvature is NaN
+    # (the bend pools skip it), its other outputs finite
+    import warnings
+
+    x, ta = _received(3, 12.0)
+    plan = plan_front_end(CFG, FS, v_max_mps=5, sound_speed_mps=C)
+    fe = FrontEnd(plan)
+    bb = np.concatenate([fe.push(x)[0], fe.flush()[0]])
+    symbols = FRAME.symbols.copy()
+    symbols[CFG.n_pilot:] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit = fit_whole_frame(bb, plan.fs_data, 0.0, config=CFG, symbols=symbols,
+                              reference=np.ones(len(symbols), bool), delays_s=[ta + d for d, _, _ in PATHS],
+                              v_mps=V + 0.05, sound_speed_mps=C)
+    assert np.isnan(fit.curvature_s2[0]) and np.isnan(fit.curvature_noise_s4[0])
+    assert fit.tilt_delay_s[0] == 0.0
+    assert np.all(np.isfinite(fit.v_mps)) and np.all(np.isfinite(fit.delays_s))

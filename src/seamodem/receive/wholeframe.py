@@ -108,7 +108,8 @@ class WholeFrameFit:
         over frames (``FrameMeasurer``: a merged surface image lasts while one
         frame's curvature is within its noise). c is invariant to the path's
         gain and delay, so a channel whose echo stays put also adds coherently
-        over frames.
+        over frames. NaN (both) when the reference left a sub-band without
+        energy (decisions all alike: its spectrum a line at 0 Hz).
     curvature_noise_s4 : numpy.ndarray
         That noise expectation [s⁴] (circular: half of it per component of c),
         also the σ of the unbiased fourth power on a channel without curvature.
@@ -736,39 +737,43 @@ def fit_whole_frame(
     strip = np.exp(-1j * path_phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
     zb, share, fb = seg.band_sums(r_p, inst_p, strip, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
                                   n_bands=_N_BANDS)
-    power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
-    # no sub-band without energy, nor one without noise (a noiseless fit): each ln|z| at least 1e-12 of variance
-    var = np.maximum(n_ref * noise_var * share / (2 * power), 1e-12)
-    fc = fb - np.sum(fb * share)
-    span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted) [Hz²]
-    u = fc / math.sqrt(span2)  # in units of its RMS: the normal equations well conditioned
-    design_f = np.column_stack([np.ones(_N_BANDS), u, u**2])
-    cov = np.linalg.inv(design_f.T @ (design_f / var[:, None]))
-    # each sub-band's sum is its share of the pulse's energy times the channel there: ln|H| is ln|z| less
-    # ln(share). The split into equal-energy sub-bands is by whole FFT bins, so the shares differ by ±0.2 %
-    # with each frame's symbols; read as ln|H|, that made a bend of its own, ±3e-11 s² (a one-path frame at
-    # 30 dB: its range σ 3.4 mm for errors of 0.05 mm, the pooled bend's bound)
-    a = cov @ (design_f.T @ ((np.log(power) / 2 - np.log(share)) / var))
-    # the phase across the sub-bands: its slope is the fitted delay's (≈ 0 once converged, not counted), its
-    # curvature the group delay's dispersion, the derivative of the same complex number (its real part)
-    phi = np.unwrap(np.angle(zb))
-    b = cov @ (design_f.T @ (phi / var))
-    # the slope a[1] is left out: a loss that grows with frequency (absorption, 3–4 dB across the band at
-    # 1 km; a transducer's response) tilts |H| without moving the group delay; a merged echo bends it
-    # the curvature c (complex: ln|H| and the phase, per RMS-of-f squared) of 1 + b e^{−j2πfΔ} is −w(1−w)(2πΔ)²
-    # at w = b e/(1 + b e), the bias Re(w)·Δ: for |b| ≤ 1, |Re w|/√|w(1 − w)| ≤ 1, so the bias is at most
-    # √|d²ln H/df²|/2π = √(2|c|/span²)/2π whatever Δ (the slope alone would give |w(1−w)|·2πΔ²·span, 7×
-    # smaller for a 0.9 echo 17 µs behind). c scaled so that |c|² is that bound's fourth power [s⁴], and its
-    # noise expectation 2 cov, also that noise's σ (|c|² of noise alone is exponential: its σ is its mean)
-    scale4 = 4 / (span2**2 * (2 * np.pi) ** 4)
-    curv[p] = math.sqrt(scale4) * complex(a[2], b[2])
-    curv_noise[p] = scale4 * 2 * cov[2, 2]
-    c2 = a[2] ** 2 + b[2] ** 2 - 9 * 2 * cov[2, 2]  # |c|² beyond 3 of its noise σ, as the amplitude rate
-    # the bias lies within ± the bound, its sign and size set by the echo's phase: its σ is that of a uniform
-    # spread over it, bound/√3. A bend beyond |c| ≈ 1/2 is more than a weaker echo gives (several, or one
-    # stronger than the path): the slope's RMS over the band, 2|c|/(2π span), the larger there, is the scale
-    if math.isfinite(c2) and c2 > 0:
-        tilt[p] = max((scale4 * c2) ** 0.25 / math.sqrt(3), 2 * math.sqrt(c2 / span2) / (2 * np.pi))
+    if np.all(share > 0):
+        power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
+        # no sub-band without energy, nor one without noise (a noiseless fit): each ln|z| at least 1e-12 of variance
+        var = np.maximum(n_ref * noise_var * share / (2 * power), 1e-12)
+        fc = fb - np.sum(fb * share)
+        span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted) [Hz²]
+        u = fc / math.sqrt(span2)  # in units of its RMS: the normal equations well conditioned
+        design_f = np.column_stack([np.ones(_N_BANDS), u, u**2])
+        cov = np.linalg.inv(design_f.T @ (design_f / var[:, None]))
+        # each sub-band's sum is its share of the pulse's energy times the channel there: ln|H| is ln|z| less
+        # ln(share). The split into equal-energy sub-bands is by whole FFT bins, so the shares differ by ±0.2 %
+        # with each frame's symbols; read as ln|H|, that made a bend of its own, ±3e-11 s² (a one-path frame at
+        # 30 dB: its range σ 3.4 mm for errors of 0.05 mm, the pooled bend's bound)
+        a = cov @ (design_f.T @ ((np.log(power) / 2 - np.log(share)) / var))
+        # the phase across the sub-bands: its slope is the fitted delay's (≈ 0 once converged, not counted), its
+        # curvature the group delay's dispersion, the derivative of the same complex number (its real part)
+        phi = np.unwrap(np.angle(zb))
+        b = cov @ (design_f.T @ (phi / var))
+        # the slope a[1] is left out: a loss that grows with frequency (absorption, 3–4 dB across the band at
+        # 1 km; a transducer's response) tilts |H| without moving the group delay; a merged echo bends it
+        # the curvature c (complex: ln|H| and the phase, per RMS-of-f squared) of 1 + b e^{−j2πfΔ} is −w(1−w)(2πΔ)²
+        # at w = b e/(1 + b e), the bias Re(w)·Δ: for |b| ≤ 1, |Re w|/√|w(1 − w)| ≤ 1, so the bias is at most
+        # √|d²ln H/df²|/2π = √(2|c|/span²)/2π whatever Δ (the slope alone would give |w(1−w)|·2πΔ²·span, 7×
+        # smaller for a 0.9 echo 17 µs behind). c scaled so that |c|² is that bound's fourth power [s⁴], and its
+        # noise expectation 2 cov, also that noise's σ (|c|² of noise alone is exponential: its σ is its mean)
+        scale4 = 4 / (span2**2 * (2 * np.pi) ** 4)
+        curv[p] = math.sqrt(scale4) * complex(a[2], b[2])
+        curv_noise[p] = scale4 * 2 * cov[2, 2]
+        c2 = a[2] ** 2 + b[2] ** 2 - 9 * 2 * cov[2, 2]  # |c|² beyond 3 of its noise σ, as the amplitude rate
+        # the bias lies within ± the bound, its sign and size set by the echo's phase: its σ is that of a uniform
+        # spread over it, bound/√3. A bend beyond |c| ≈ 1/2 is more than a weaker echo gives (several, or one
+        # stronger than the path): the slope's RMS over the band, 2|c|/(2π span), the larger there, is the scale
+        if math.isfinite(c2) and c2 > 0:
+            tilt[p] = max((scale4 * c2) ** 0.25 / math.sqrt(3), 2 * math.sqrt(c2 / span2) / (2 * np.pi))
+    else:
+        # a sub-band the reference put no energy in (a fit on few trusted decisions): no curvature to read
+        curv[p], curv_noise[p] = complex(math.nan, math.nan), math.nan
     # each path's delay σ above is the one with the other paths at their fitted values; fitted together,
     # an echo within the pulse's width trades its gain against the path's delay
     sigma_delay = joint_delay_sigma_s(np.maximum(sigma_d, crlb_d), delays, amps, config=config, v_mps=eps * c,
