@@ -301,3 +301,46 @@ def test_an_image_adding_to_the_path_moves_the_phase_where_the_amplitude_stays_f
     # w nearly imaginary: the amplitude shows the image's Doppler at least as much as the phase, nothing to add
     image = MergedImage(7e-6, 2e-6, 0j, 0.0, re_w=0.1, im_w=0.5, wave_doppler_mps=0.011)
     assert image_doppler_sigma_mps(image, amp_rate, CFG, sound_speed_mps=C) == 0.0
+
+
+def test_a_bend_far_below_one_frames_noise_is_counted_on_a_long_steady_recording():
+    # a merged image at 5 dB bends one frame's channel by a quarter of its noise σ: ten frames cannot show it
+    # (|c̄|² ≈ 10/16 of its floor), 120 frames at the same range can (7.5 times it, against 4.6); the range
+    # moving beyond B/(8 f₀) of the newest frame's leaves the older frames out (the bend's phase turns there)
+    from seamodem.receive.frame import (CURVATURE_POOL_FRAMES, CURVATURE_POOL_MAX_FRAMES, _CurvaturePool,
+                                        steady_bend_range_share)
+
+    rng = np.random.default_rng(13)
+    noise = 1e-20
+    bend = 0.25 * np.sqrt(noise) * np.exp(1.1j)
+    share = steady_bend_range_share(CFG)
+    counted_short = counted_long = counted_moving = counted_noise = 0
+    for _ in range(100):
+        short, long, moving, quiet = (_CurvaturePool(share) for _ in range(4))
+        for k in range(CURVATURE_POOL_MAX_FRAMES):
+            fit = _fit(_noisy_bend(rng, bend, noise), noise)
+            long.add_fit(fit, 0, range_m=900.0 + 0.01 * k)
+            moving.add_fit(fit, 0, range_m=900.0 + 2.0 * k)  # 240 m over the run: 10 % at its start
+            quiet.add_fit(_fit(_noisy_bend(rng, 0.0, noise), noise), 0, range_m=900.0)
+            if k < CURVATURE_POOL_FRAMES:
+                short.add_fit(fit, 0, range_m=900.0)
+        counted_short += short.coherent_s4() > 0
+        counted_long += long.coherent_s4() > 0
+        counted_moving += moving.coherent_s4() > 0
+        counted_noise += quiet.coherent_s4() > 0
+    # (100 runs: 5 short pools counted, 82 long, 20 moving, 1 of noise alone)
+    assert counted_short <= 20, counted_short
+    assert counted_long >= 70, counted_long
+    # moving: only the frames within 4 % of the newest range (≈ 19 of them) pool with it
+    assert counted_moving < counted_long - 30, (counted_moving, counted_long)
+    # noise alone: two tests of 1 % each
+    assert counted_noise <= 7, counted_noise
+    # without ranges (or without the share) the pool is the last ten frames, as before
+    plain = _CurvaturePool()
+    for _ in range(CURVATURE_POOL_MAX_FRAMES):
+        plain.add_fit(_fit(bend, noise), 0, range_m=900.0)  # noiseless: |c̄|² = 1/16 of one frame's noise
+    assert plain.coherent_s4() == 0.0
+    steady = _CurvaturePool(share)
+    for _ in range(CURVATURE_POOL_MAX_FRAMES):
+        steady.add_fit(_fit(bend, noise), 0, range_m=900.0)
+    assert steady.coherent_s4() == pytest.approx(abs(bend) ** 2 - noise / CURVATURE_POOL_MAX_FRAMES, rel=1e-9)

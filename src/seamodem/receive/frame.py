@@ -470,11 +470,42 @@ class _RatePool:
 #: frames whose complex channel curvatures are averaged (``_CurvaturePool``): a merged surface image's
 #: geometry changes over minutes at a kilometre, so ten frames see the same bend
 CURVATURE_POOL_FRAMES = 10
+#: the coherent mean also over older frames (up to this many) while the range stays within
+#: :func:`steady_bend_range_share` of the newest frame's: a bend of one frame's noise σ/4 (|c|² at 1/16 of
+#: its noise expectation, the corpus's far family at 5 dB: a surface image 14 µs behind, 9 mm of bias)
+#: needs about 100 frames to stand out, ten cannot show it
+CURVATURE_POOL_MAX_FRAMES = 120
+
+
+def steady_bend_range_share(config: FrameConfig) -> float:
+    """The share of the range over which a merged echo's bend keeps its phase: B/(8·f₀).
+
+    An echo merged with the direct path lies within the resolution, δ < 1/B, so its carrier phase is f₀·δ <
+    f₀/B cycles; δ goes as 1/R for a surface image (2·z_b·z_v/(R·c)), and a range change ΔR turns that phase
+    by at most (f₀/B)·ΔR/R cycles: within B/(8·f₀) of the range, an eighth of a cycle at most, and the bends
+    add coherently (to within cos(π/4) at the edge).
+
+    >>> from seamodem import get_preset
+    >>> round(steady_bend_range_share(get_preset("jmse2024")), 4)
+    0.04
+    """
+    return config.symbol_rate_hz * (1 + config.rolloff) / (8 * config.carrier_hz)
+
 #: the coherent mean's |c̄|² over its noise expectation beyond which it counts: noise alone leaves an
 #: exponential ratio of mean 1, beyond ln(100) once in 100 pools (at ln(1000), a far recording at −1 dB
 #: whose ten bends all pointed one way ended at 6.86 and its frames 4–8σ off; counted, the false alarm's
 #: bound is that of a bend at the noise's scale)
 _COHERENT_THRESHOLD = math.log(100.0)
+
+
+def _coherent_excess(bends: np.ndarray, noise: np.ndarray) -> float:
+    """|c̄|² of the inverse-noise weighted mean less its noise expectation when beyond
+    :data:`_COHERENT_THRESHOLD` times that expectation, else 0 [s⁴]."""
+    weight = 1.0 / noise
+    mean = complex(np.sum(weight * bends) / np.sum(weight))
+    floor = 1.0 / float(np.sum(weight))  # E|c̄|² of noise alone
+    power = abs(mean) ** 2
+    return power - floor if power > _COHERENT_THRESHOLD * floor else 0.0
 
 
 class _CurvaturePool(_FramePool):
@@ -494,18 +525,25 @@ class _CurvaturePool(_FramePool):
       Counted beyond :data:`_COHERENT_THRESHOLD` times its noise expectation, less that expectation
       (unbiased). A steady bend whose |c|² is 0.8 of one frame's noise expectation: counted in 88 % of
       10-frame pools by the coherent mean, 22 % by the fourth powers' (``tests/receive/test_merged_image.py``).
+      The same mean also over up to :data:`CURVATURE_POOL_MAX_FRAMES` older frames while the range stays
+      within :func:`steady_bend_range_share` of the newest frame's (the bend keeps its phase there): on a
+      long recording, a bend at 1/16 of one frame's noise expectation is counted once about 100 frames are in.
 
     Fits on decisions do not feed it: at −3.5 dB their |c|² is 3.3 times the noise expectation the
     residual gives (80 fits on a single path), which would read as a bend.
     """
 
-    def __init__(self):
+    def __init__(self, range_share: float = 0.0):
         super().__init__()
-        self._bends: collections.deque[tuple[complex, float]] = collections.deque(maxlen=CURVATURE_POOL_FRAMES)
+        self._bends: collections.deque[tuple[complex, float, float]] = collections.deque(
+            maxlen=CURVATURE_POOL_MAX_FRAMES)
+        self._range_share = float(range_share)
 
-    def add_fit(self, wf: WholeFrameFit, first: int, image: MergedImage | None = None) -> None:
+    def add_fit(self, wf: WholeFrameFit, first: int, image: MergedImage | None = None,
+                range_m: float = math.nan) -> None:
         """Pool the fit's direct-path curvature (``wf.curvature_*``; nothing when it has none), less the bend
-        of a surface image whose bias is taken out (``image``), whose variance adds to the noise's."""
+        of a surface image whose bias is taken out (``image``), whose variance adds to the noise's; with the
+        frame's range (``range_m``), for the coherent mean over older frames."""
         if wf.curvature_s2 is None:
             return
         bend, noise = complex(wf.curvature_s2[first]), float(wf.curvature_noise_s4[first])
@@ -513,18 +551,23 @@ class _CurvaturePool(_FramePool):
             bend, noise = bend - image.curvature_s2, noise + image.curvature_var_s4
         self.add(abs(bend) ** 2 - noise, noise)
         if cmath.isfinite(bend) and math.isfinite(noise) and noise > 0:
-            self._bends.append((bend, noise))
+            self._bends.append((bend, noise, float(range_m)))
 
     def coherent_s4(self) -> float:
-        """|c̄|² less its noise expectation [s⁴] when beyond the threshold, else 0 (0 with none)."""
+        """|c̄|² less its noise expectation [s⁴] when beyond the threshold, else 0 (0 with none): over the
+        last :data:`CURVATURE_POOL_FRAMES`, and over every pooled frame whose range is within the steady
+        bend's share (:func:`steady_bend_range_share`) of the newest one's when they are more (the larger
+        counts; each test's false alarm is 1 in 100 pools, so at most 2 in 100 with both)."""
         if not self._bends:
             return 0.0
-        bends, noise = (np.array(v) for v in zip(*self._bends))
-        weight = 1.0 / noise.real
-        mean = complex(np.sum(weight * bends) / np.sum(weight))
-        floor = 1.0 / float(np.sum(weight))  # E|c̄|² of noise alone
-        power = abs(mean) ** 2
-        return power - floor if power > _COHERENT_THRESHOLD * floor else 0.0
+        bends, noise, ranges = (np.array(v) for v in zip(*self._bends))
+        found = _coherent_excess(bends[-CURVATURE_POOL_FRAMES:], noise[-CURVATURE_POOL_FRAMES:])
+        newest = ranges[-1]
+        if self._range_share > 0 and math.isfinite(newest):
+            steady = np.abs(ranges - newest) <= self._range_share * newest  # (NaN ranges are not)
+            if np.count_nonzero(steady) > CURVATURE_POOL_FRAMES:
+                found = max(found, _coherent_excess(bends[steady], noise[steady]))
+        return found
 
     @property
     def delay_s(self) -> float:
@@ -882,7 +925,7 @@ class FrameMeasurer:
         # the fading's scale over the last frames (one frame's rate is one draw of it, its Doppler error
         # another): the direct path's from decoded frames' whole-frame fits, and the tone's from every frame
         self._fade_pool, self._tone_fade_pool = _RatePool(), _RatePool()
-        self._curvature_pool = _CurvaturePool()
+        self._curvature_pool = _CurvaturePool(steady_bend_range_share(config))
         # the direct path's amplitude from frame to frame (decoded frames): a fading or beating slower than a
         # frame, whose rate within one frame is within its noise
         self._slow_fade_pool = _RatePool()
@@ -1158,7 +1201,7 @@ class FrameMeasurer:
             # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
-            self._curvature_pool.add_fit(fit[0], fit[1], image)
+            self._curvature_pool.add_fit(fit[0], fit[1], image, range_m)
             echoes = fit_echoes(fit[0], fit[1])
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
