@@ -344,3 +344,55 @@ def test_a_bend_far_below_one_frames_noise_is_counted_on_a_long_steady_recording
     for _ in range(CURVATURE_POOL_MAX_FRAMES):
         steady.add_fit(_fit(bend, noise), 0, range_m=900.0)
     assert steady.coherent_s4() == pytest.approx(abs(bend) ** 2 - noise / CURVATURE_POOL_MAX_FRAMES, rel=1e-9)
+
+
+def _track_record(k: int):
+    import math
+
+    from seamodem.receive.records import MeasurementRecord
+
+    t = 0.2 + k + 0.6  # arrival at 900 m, closing at 1 m/s
+    r = 900.0 - 1.0 * t
+    return MeasurementRecord(frame_index=k, t_emit_s=t - r / C, t_arrival_s=t, tof_s=r / C, range_m=r, v_r_mps=1.0,
+                             snr_db=5.0, v_r_tone_eq9_mps=math.nan, v_r_bank_mps=1.0, detection_z=100.0,
+                             detection_rho=0.5, sigma_range_m=0.001, sigma_v_r_mps=0.001,
+                             sigma_v_r_bank_mps=0.01, tone_c_n0_dbhz=60.0)
+
+
+def _lookahead(frames: int):
+    from types import SimpleNamespace
+
+    from seamodem.receive.frame import RecordLookahead
+
+    # what the look-ahead reads of its measurer: the pool's bound changes between pushes
+    meas = SimpleNamespace(config=CFG, settings=SimpleNamespace(sound_speed_mps=C), pooled_merge_delay_s=0.0,
+                           pooled_fade_rate_hz=0.0, last_shape=(0.0, C, None, 0.0))
+    return meas, RecordLookahead(meas, frames)
+
+
+@pytest.mark.parametrize("n_records, counts_from", [(14, 7), (6, 5)])
+def test_a_files_first_records_wait_for_the_curvature_pool(n_records, counts_from):
+    # the pool's coherent mean counts a surface image's bend from the 8th frame on (a far recording at 6 dB:
+    # its second frame, 18 mm off, had been given out with σ 1.2 mm five frames after it, before the pool
+    # counted): a file's records wait until ten frames are in (or the stream ends), then take its bound
+    import dataclasses
+
+    from seamodem.receive.frame import CURVATURE_POOL_FRAMES
+
+    meas, look = _lookahead(5)
+    bound = 10e-6
+    out = []
+    for k in range(n_records):
+        if k == counts_from:
+            meas.pooled_merge_delay_s = bound
+        out += look.push(_track_record(k))
+        # nothing is given out before the pool has had its frames (or the stream its end)
+        assert out == [] or k + 1 >= CURVATURE_POOL_FRAMES
+    out += look.flush()
+    assert [r.frame_index for r in out] == list(range(n_records))
+    for r in out:
+        assert r.sigma_range_m == pytest.approx(np.hypot(0.001, C * bound), rel=1e-9)
+        assert dataclasses.replace(r, sigma_range_m=0.001) == _track_record(r.frame_index)
+    # a live receiver (no look-ahead) gives each record out at once, as measured
+    meas, live = _lookahead(0)
+    assert live.push(_track_record(0)) == [_track_record(0)]
