@@ -455,8 +455,7 @@ def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> 
     if not ranges_m:
         return ""
     r, s = statistics.median(ranges_m), statistics.median(sigmas_m)
-    bandwidth = config.symbol_rate_hz * (1 + config.rolloff)
-    low, high = max(3 * s * r / 0.9, _SHALLOWEST_END_M**2), r * sound_speed_mps / (2 * bandwidth)
+    low, high = max(3 * s * r / 0.9, _SHALLOWEST_END_M**2), r * sound_speed_mps / (2 * config.bandwidth_hz)
     if not low < high:
         return ""
     return (f"note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth): at the median range "

@@ -223,7 +223,7 @@ def merged_image_delay_s(range_m: float, beacon_depth_m: float, vehicle_depth_m:
         return 0.0
     h = math.sqrt(range_m**2 - dz**2)
     delay = (math.hypot(h, beacon_depth_m + vehicle_depth_m) - range_m) / sound_speed_mps
-    resolution = 1.0 / (config.symbol_rate_hz * (1 + config.rolloff))
+    resolution = 1.0 / config.bandwidth_hz
     return delay if delay < resolution else 0.0
 
 
@@ -489,7 +489,7 @@ def steady_bend_range_share(config: FrameConfig) -> float:
     >>> round(steady_bend_range_share(get_preset("jmse2024")), 4)
     0.04
     """
-    return config.symbol_rate_hz * (1 + config.rolloff) / (8 * config.carrier_hz)
+    return config.bandwidth_hz / (8 * config.carrier_hz)
 
 #: the coherent mean's |c̄|² over its noise expectation beyond which it counts: noise alone leaves an
 #: exponential ratio of mean 1, beyond ln(100) once in 100 pools (at ln(1000), a far recording at −1 dB
@@ -1468,7 +1468,7 @@ class RecordLookahead:
         image's bend from the eighth frame on, 10–15 mm for the others)."""
         settled = self._settle(record, shape)
         if self._pushed >= CURVATURE_POOL_FRAMES:
-            return self._give_waiting() + [settled]
+            return [settled]  # (those kept go out before it: push, flush)
         used_s, metres_per_s = shape[0], shape[1]
         self._waiting.append((settled, max(used_s, _K_MERGE * self.measurer.pooled_merge_delay_s), metres_per_s))
         return []
