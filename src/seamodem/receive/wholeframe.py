@@ -48,7 +48,8 @@ from .doppler import log_amplitude_rate
 from .measure import power_excess
 from .multipath import raised_cosine
 
-__all__ = ["WholeFrameFit", "fit_whole_frame", "known_signal_velocity_crlb_mps"]
+__all__ = ["WholeFrameFit", "channel_bend_s2", "fit_whole_frame", "known_signal_velocity_crlb_mps", "split_clusters",
+           "subband_bend", "unmodelled_paths"]
 
 
 @dataclass(frozen=True)
@@ -109,7 +110,11 @@ class WholeFrameFit:
         frame's curvature is within its noise). c is invariant to the path's
         gain and delay, so a channel whose echo stays put also adds coherently
         over frames. NaN (both) when the reference left a sub-band without
-        energy (decisions all alike: its spectrum a line at 0 Hz).
+        energy (decisions all alike: its spectrum a line at 0 Hz). With ``clean``, the direct path's is read
+        after the paths the fit left in its residual, 2/B after it and later, are taken out
+        (:func:`unmodelled_paths`).
+        Each echo at least 0.2 of the strongest path's amplitude has its own (its bend is a cluster's:
+        :func:`split_clusters`); NaN for the weaker ones.
     curvature_noise_s4 : numpy.ndarray
         That noise expectation [s⁴] (circular: half of it per component of c),
         also the σ of the unbiased fourth power on a channel without curvature.
@@ -121,6 +126,8 @@ class WholeFrameFit:
     pilot_noise_excess : float
         Mean over median-implied power (× ln 2; ≥ 1, 1 for Gaussian noise) of the residual's matched-filter
         outputs at the pilot's symbols: the impulses left where the pilot lies, which the pilot's arrival sees.
+    noise_var : float
+        The residual's power per matched-filter output at the first path's instants (``es_n0``'s noise).
     """
 
     delays_s: np.ndarray
@@ -139,6 +146,7 @@ class WholeFrameFit:
     curvature_noise_s4: np.ndarray | None = None
     delay_scatter_s: np.ndarray | None = None
     pilot_noise_excess: float = 1.0
+    noise_var: float = math.nan
 
 
 def known_signal_velocity_crlb_mps(config: FrameConfig, es_n0, n_symbols: int, *, sound_speed_mps: float):
@@ -326,6 +334,20 @@ _COUPLED_KAPPA, _JOINT_STEPS = 1.05, 6
 _IDENTIFIABLE_KAPPA = 50.0
 #: sub-bands of a path's band whose amplitudes give its channel's tilt and curvature (``tilt_delay_s``)
 _N_BANDS = 4
+#: the paths a fit left in its residual (``unmodelled_paths``) are taken out of the direct path's sub-bands from
+#: this many 1/B after it on: nearer, the residual of a merged echo fitted with the direct path (its pulse's
+#: derivative) peaks (a far recording at 6 dB, a surface image 22 µs behind: peaks 0.09–0.15 at 100–124 µs)
+_MISSED_AFTER_B = 2.0
+#: echoes at least this share of the strongest path's amplitude get their own channel's curvature
+_BEND_MIN_FRACTION = 0.2
+#: an echo whose bend |c|²/noise exceeds this is split (noise alone: exponential, beyond 9 in 1.2e-4 of fits)
+_SPLIT_BEND = 9.0
+#: the two paths of a split start this many 1/B apart: the echo they replace and one after it, or before it,
+#: or either side of it (the fitted echo lies near the stronger of the two)
+_SPLIT_WIDTH = 1.0
+#: a split is kept when n·(residual's drop)/residual exceeds this (twice its log-likelihood ratio, for 2 added
+#: real parameters of delay and 2 of gain and 2 of Doppler and drift; χ² with 6 degrees beyond 20 in 3e-3)
+_SPLIT_GAIN = 20.0
 _TAPS = np.arange(-2, 4)  # the interpolator's sample offsets around a position
 
 
@@ -496,6 +518,176 @@ class FrameSegment:
         return (self.fs * math.sqrt(period)) * self._fft.ifft(spec)[: self.n]
 
 
+def subband_bend(zb: np.ndarray, share: np.ndarray, fb: np.ndarray, var: np.ndarray) -> tuple[complex, float, float]:
+    """A channel's curvature across its band from sub-band sums (``FrameSegment.band_sums``): (c [s²], complex,
+    ln|H|'s and the phase's; its noise expectation |c|² [s⁴]; the band's mean square of f [Hz²]).
+
+    Each sub-band's sum is its share of the pulse's energy times the channel there: ln|H| is ln|z| less
+    ln(share) (the split into equal-energy sub-bands is by whole FFT bins, so the shares differ by ±0.2 %
+    with each frame's symbols; read as ln|H|, that made a bend of its own, ±3e-11 s²: a one-path frame at
+    30 dB, its range σ 3.4 mm for errors of 0.05 mm, the pooled bend's bound). ln|H| and the phase across
+    the sub-bands each get a line and a parabola in f, weighted by ``var`` (each ln|z|'s noise variance;
+    only its shape matters to c); the phase's slope is the fitted delay's (≈ 0 once converged), and the
+    slope of ln|H| is left out: a loss that grows with frequency (absorption, 3–4 dB across the band at 1
+    km; a transducer's response) tilts |H| without moving the group delay; a merged echo bends it.
+
+    The curvature c (per RMS-of-f squared) of 1 + b e^{−j2πfΔ} is −w(1−w)(2πΔ)² at w = b e/(1 + b e), the
+    bias Re(w)·Δ: for |b| ≤ 1, |Re w|/√|w(1 − w)| ≤ 1, so the bias is at most √|d²ln H/df²|/2π = √(2|c|/span²)/2π
+    whatever Δ (the slope alone would give |w(1−w)|·2πΔ²·span, 7× smaller for a 0.9 echo 17 µs behind). c
+    is scaled so that |c|² is that bound's fourth power [s⁴]; its noise expectation is 2 cov (|c|² of noise
+    alone is exponential: its σ is its mean).
+    """
+    n_bands = len(zb)
+    fc = fb - np.sum(fb * share)
+    span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted) [Hz²]
+    u = fc / math.sqrt(span2)  # in units of its RMS: the normal equations well conditioned
+    design_f = np.column_stack([np.ones(n_bands), u, u**2])
+    cov = np.linalg.inv(design_f.T @ (design_f / var[:, None]))
+    power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
+    a = cov @ (design_f.T @ ((np.log(power) / 2 - np.log(share)) / var))
+    b = cov @ (design_f.T @ (np.unwrap(np.angle(zb)) / var))
+    scale4 = 4 / (span2**2 * (2 * np.pi) ** 4)
+    return math.sqrt(scale4) * complex(a[2], b[2]), float(scale4 * 2 * cov[2, 2]), span2
+
+
+def channel_bend_s2(f_hz: np.ndarray, energy: np.ndarray, channel: np.ndarray, n_bands: int = _N_BANDS) -> np.ndarray:
+    """The curvature c [s²] (:func:`subband_bend`) the whole-frame fit reads from channels H(f) (rows of
+    ``channel`` on the grid ``f_hz``, offsets from the carrier) seen through a pulse of spectral energy
+    ``energy``, noiseless: the same equal-energy sub-bands and the same parabolas. Where ln H is not a
+    parabola over the band (a merged echo near the null, f₀Δ near a whole cycle) the fit's c differs from
+    d²ln H/df²/(2π)² at f₀: an image 0.9 at 22 µs, 0.1 cycle from the null, 18 % more; at 33 µs, 51 %."""
+    order = np.argsort(f_hz)
+    f_hz, energy, channel = f_hz[order], energy[order], np.atleast_2d(channel)[:, order]
+    cum = np.cumsum(energy)
+    which = np.minimum((cum / cum[-1] * n_bands).astype(int), n_bands - 1)
+    e = np.bincount(which, energy, n_bands)
+    share = e / e.sum()
+    fb = np.bincount(which, energy * f_hz, n_bands) / e
+    out = np.empty(len(channel), complex)
+    for k, h in enumerate(channel):
+        zb = (np.bincount(which, (energy * h).real, n_bands) + 1j * np.bincount(which, (energy * h).imag, n_bands)) / e.sum()
+        out[k] = subband_bend(zb, share, fb, share / np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny))[0]
+    return out
+
+
+def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config: FrameConfig, *,
+                     deviations: float = 4.5, max_components: int = 16) -> tuple[np.ndarray, list]:
+    """The paths a fit left in its residual from :data:`_MISSED_AFTER_B`/B after the direct path on, found one
+    after the other (CLEAN): (their sum on the residual's grid, [(lag [s], amplitude)]).
+
+    ``template`` is the direct path's waveform at unit gain. The residual's correlation with it, from
+    −:data:`_MISSED_AFTER_B`/B to a pilot's length after the direct path (``find_echoes``' reach), is
+    searched for its largest peak (4× interpolated, then a parabola) that stands ``deviations`` noise σ's
+    above it (the residual's power over the template's energy: a complex Gaussian beyond 4.5 σ, e^{−20}
+    per lag); that component's exact contribution, its amplitude times the template's own correlation at
+    the fractional lag, is taken out in the frequency domain, and the next peak sought. Components
+    nearer the direct path than :data:`_MISSED_AFTER_B`/B (the misfit of a merged echo fitted with it,
+    its pulse's derivative) are taken out of the correlation only, so that their sidelobes are not read
+    as paths (at 60 dB, an image −0.9 at 8 µs: its misfit's sidelobes, taken for paths, bent the channel
+    read 10× in its phase); the farther ones are the paths returned.
+
+    The sub-band sums of the direct path's channel (its bend, ``curvature_s2``) see every unmodelled path
+    within a few 1/B: a sub-band is B/4 wide, so a path at Δ ripples it by its amplitude times
+    sinc(Δ·B/4) (the corpus's far family at 6 dB: bottom paths 0.12–0.15 at 265–533 µs, below the pilot
+    fit's 0.15, bent the channel 10 times as much as the merged surface image did, a 30 mm bound). They
+    are taken out of the direct path's sub-bands, not fitted (their gains' error is noise's there).
+    """
+    import scipy.fft
+
+    n = len(resid)
+    bw = config.symbol_rate_hz * (1 + config.rolloff)
+    near = _MISSED_AFTER_B * fs / bw  # [samples]
+    hi = min(float(n - 1), config.n_pilot * config.symbol_period_s * fs)
+    energy = float(np.sum(np.abs(template) ** 2))
+    if not energy > 0 or hi <= near:
+        return np.zeros(n, complex), []
+    m = scipy.fft.next_fast_len(2 * n)
+    k = scipy.fft.fftfreq(m) * m  # signed bins
+    t_spec = scipy.fft.fft(template, m)
+    c_spec = scipy.fft.fft(resid, m) * np.conj(t_spec) / energy  # the correlation's spectrum, at path scale
+    own = np.abs(t_spec) ** 2 / energy  # one unit path at lag 0
+    var = float(np.mean(np.abs(resid) ** 2)) / energy
+    up = 4
+    lags = np.arange(-int(near * up), int(hi * up) + 1)  # [samples / up], negative ones wrapped
+    half = m // 2
+    found, total = [], np.zeros(m, complex)
+    for _ in range(max_components):
+        big = np.zeros(up * m, complex)
+        big[:half], big[-(m - half):] = c_spec[:half], c_spec[half:]
+        mag = np.abs(scipy.fft.ifft(big)[lags % (up * m)]) * up
+        i = int(np.argmax(mag))
+        if mag[i] ** 2 < deviations**2 * var:
+            break
+        shift = 0.0
+        if 0 < i < len(mag) - 1:
+            den = mag[i - 1] - 2 * mag[i] + mag[i + 1]
+            shift = float(np.clip(0.5 * (mag[i - 1] - mag[i + 1]) / den, -0.5, 0.5)) if den < 0 else 0.0
+        lag = (lags[i] + shift) / up  # [samples]
+        ramp = np.exp(-2j * np.pi * k * lag / m)
+        amp = complex(np.sum(c_spec * np.conj(ramp)) / np.sum(own))  # least squares at that lag
+        c_spec = c_spec - amp * own * ramp
+        if lag >= near:
+            total += amp * t_spec * ramp
+            found.append((lag / fs, amp))
+    return scipy.fft.ifft(total)[:n], found
+
+
+def split_clusters(fit: WholeFrameFit, refit, direct_s: float, *, config: FrameConfig,
+                   splits: int = 1) -> WholeFrameFit:
+    """The fit with up to ``splits`` echoes that are clusters of paths resolved, each into two paths.
+
+    An echo whose own channel bends beyond its noise (``WholeFrameFit.curvature_s2``: |c|² beyond
+    :data:`_SPLIT_BEND` times its noise expectation) is two or more paths fitted as one: a bottom path and
+    its surface image 1/B apart, at long range. Its misfit leaks into the direct path's sub-bands through
+    the pulse's sidelobes (the corpus's far family at 15 dB, the ends' depths given: the direct path's
+    bend 7–45 times its noise where the fit had one path for two, 1–5 where it had both), and the bend
+    bound (``FrameMeasurer``) reads it as a merged echo of the direct path's. The most bent echo is
+    replaced by two paths 1/B apart (:data:`_SPLIT_WIDTH`): the echo and one after it, one before it,
+    or either side of it, since the fitted echo lies near the stronger of the two (none within 1/B of
+    the direct path, before the fit or after it: a path there couples with the direct one, whose
+    channel's shape is the bend bound's to judge); the frame is fitted
+    again from each (``refit(delays)``), and the best kept when its residual dropped by more than two
+    added paths explain by chance (:data:`_SPLIT_GAIN`).
+
+    Parameters
+    ----------
+    fit : WholeFrameFit
+        The frame's fit.
+    refit : callable
+        ``refit(delays_s)``: the frame fitted again from these paths' arrivals.
+    direct_s : float
+        The direct path's arrival [s] (never split: a merged echo there is the bend bound's).
+    config : FrameConfig
+        The frame (its band).
+    splits : int
+        Most echoes split, one after the other.
+    """
+    width_s = _SPLIT_WIDTH / (config.symbol_rate_hz * (1 + config.rolloff))
+    for _ in range(splits):
+        if fit.curvature_s2 is None:
+            break
+        with np.errstate(invalid="ignore", divide="ignore"):
+            bends = np.abs(fit.curvature_s2) ** 2 / fit.curvature_noise_s4
+        bends[int(np.argmin(np.abs(fit.delays_s - direct_s)))] = np.nan
+        if not np.any(bends > _SPLIT_BEND):
+            break
+        q = int(np.nanargmax(bends))
+        best = fit
+        for pair in ((0.0, width_s), (-width_s, 0.0), (-width_s / 2, width_s / 2)):
+            if fit.delays_s[q] + pair[0] - direct_s < width_s:
+                continue  # a path within 1/B of the direct one: the bend bound's, not a split's
+            trial = refit(np.concatenate([np.delete(fit.delays_s, q), fit.delays_s[q] + np.array(pair)]))
+            others = np.abs(trial.delays_s - direct_s)
+            if np.count_nonzero(others < width_s) > 1:
+                continue  # the fit moved one there
+            if trial.noise_var < best.noise_var:
+                best = trial
+        if not fit.n_reference * (fit.noise_var - best.noise_var) / best.noise_var > _SPLIT_GAIN:
+            break
+        fit = best
+    return fit
+
+
 def fit_whole_frame(
     bb: np.ndarray,
     fs: float,
@@ -510,6 +702,8 @@ def fit_whole_frame(
     n_segments: int = 32,
     sweeps: int = 4,
     direct_s: float | None = None,
+    split: int = 0,
+    clean: bool = False,
 ) -> WholeFrameFit:
     """Fit every path's gain, mean Doppler and drift over the whole frame.
 
@@ -536,6 +730,13 @@ def fit_whole_frame(
     direct_s : float, optional
         Arrival of the direct path [s]: the path nearest to it gets the
         sub-band analysis of ``tilt_delay_s`` (default: the earliest path).
+    split : int
+        Most echoes that are clusters of paths split in two, the frame fitted again
+        each time (:func:`split_clusters`; default none).
+    clean : bool
+        Read the direct path's bend after the paths the fit left in its residual, 2/B
+        after it and later, are taken out (:func:`unmodelled_paths`). The receiver
+        does so when the ends' depths are given (``FrameMeasurer``).
     """
     c = sound_speed_mps
     f0 = config.carrier_hz
@@ -731,55 +932,43 @@ def fit_whole_frame(
     # in f; the RMS of its slope over the band (less the noise's) as a delay: a merged echo b at Δ makes the
     # channel 1 + b e^{−j2πfΔ}, whose log-amplitude slope and group-delay error (the arrival's bias) are the
     # imaginary and real parts of one number (the curvature brings in the real part where the slope is 0)
-    p = int(np.argmin(delays if direct_s is None else np.abs(delays - direct_s)))
-    r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
-    inst_p = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx]
-    strip = np.exp(-1j * path_phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
-    zb, share, fb = seg.band_sums(r_p, inst_p, strip, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
-                                  n_bands=_N_BANDS)
-    if np.all(share > 0):
-        power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
-        # no sub-band without energy, nor one without noise (a noiseless fit): each ln|z| at least 1e-12 of variance
-        var = np.maximum(n_ref * noise_var * share / (2 * power), 1e-12)
-        fc = fb - np.sum(fb * share)
-        span2 = float(np.sum(share * fc**2))  # mean square of f over the band (energy-weighted) [Hz²]
-        u = fc / math.sqrt(span2)  # in units of its RMS: the normal equations well conditioned
-        design_f = np.column_stack([np.ones(_N_BANDS), u, u**2])
-        cov = np.linalg.inv(design_f.T @ (design_f / var[:, None]))
-        # each sub-band's sum is its share of the pulse's energy times the channel there: ln|H| is ln|z| less
-        # ln(share). The split into equal-energy sub-bands is by whole FFT bins, so the shares differ by ±0.2 %
-        # with each frame's symbols; read as ln|H|, that made a bend of its own, ±3e-11 s² (a one-path frame at
-        # 30 dB: its range σ 3.4 mm for errors of 0.05 mm, the pooled bend's bound)
-        a = cov @ (design_f.T @ ((np.log(power) / 2 - np.log(share)) / var))
-        # the phase across the sub-bands: its slope is the fitted delay's (≈ 0 once converged, not counted), its
-        # curvature the group delay's dispersion, the derivative of the same complex number (its real part)
-        phi = np.unwrap(np.angle(zb))
-        b = cov @ (design_f.T @ (phi / var))
-        # the slope a[1] is left out: a loss that grows with frequency (absorption, 3–4 dB across the band at
-        # 1 km; a transducer's response) tilts |H| without moving the group delay; a merged echo bends it
-        # the curvature c (complex: ln|H| and the phase, per RMS-of-f squared) of 1 + b e^{−j2πfΔ} is −w(1−w)(2πΔ)²
-        # at w = b e/(1 + b e), the bias Re(w)·Δ: for |b| ≤ 1, |Re w|/√|w(1 − w)| ≤ 1, so the bias is at most
-        # √|d²ln H/df²|/2π = √(2|c|/span²)/2π whatever Δ (the slope alone would give |w(1−w)|·2πΔ²·span, 7×
-        # smaller for a 0.9 echo 17 µs behind). c scaled so that |c|² is that bound's fourth power [s⁴], and its
-        # noise expectation 2 cov, also that noise's σ (|c|² of noise alone is exponential: its σ is its mean)
-        scale4 = 4 / (span2**2 * (2 * np.pi) ** 4)
-        curv[p] = math.sqrt(scale4) * complex(a[2], b[2])
-        curv_noise[p] = scale4 * 2 * cov[2, 2]
-        c2 = a[2] ** 2 + b[2] ** 2 - 9 * 2 * cov[2, 2]  # |c|² beyond 3 of its noise σ, as the amplitude rate
-        # the bias lies within ± the bound, its sign and size set by the echo's phase: its σ is that of a uniform
-        # spread over it, bound/√3. A bend beyond |c| ≈ 1/2 is more than a weaker echo gives (several, or one
-        # stronger than the path): the slope's RMS over the band, 2|c|/(2π span), the larger there, is the scale
-        if math.isfinite(c2) and c2 > 0:
-            tilt[p] = max((scale4 * c2) ** 0.25 / math.sqrt(3), 2 * math.sqrt(c2 / span2) / (2 * np.pi))
-    else:
-        # a sub-band the reference put no energy in (a fit on few trusted decisions): no curvature to read
-        curv[p], curv_noise[p] = complex(math.nan, math.nan), math.nan
+    # (the same for every echo as strong as _BEND_MIN_FRACTION of the strongest path: a bend there is a cluster
+    # of paths fitted as one, which fit_whole_frame's ``split`` resolves; its tilt is not counted)
+    direct = int(np.argmin(delays if direct_s is None else np.abs(delays - direct_s)))
+    strongest = float(np.max(np.abs(amps)))
+    for p in range(n_paths):
+        if p != direct and not abs(amps[p]) >= _BEND_MIN_FRACTION * strongest:
+            curv[p], curv_noise[p] = complex(math.nan, math.nan), math.nan
+            continue
+        r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
+        if clean and p == direct and abs(amps[p]) > 0:
+            # less the paths the fit left in its residual: they ripple the sub-bands (unmodelled_paths)
+            r_p = r_p - unmodelled_paths(resid, (models[p] if n_paths > 1 else total) / amps[p], fs, config)[0]
+        inst_p = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx]
+        strip = np.exp(-1j * path_phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
+        zb, share, fb = seg.band_sums(r_p, inst_p, strip, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
+                                      n_bands=_N_BANDS)
+        if np.all(share > 0):
+            power = np.maximum(np.abs(zb) ** 2, np.finfo(float).tiny)
+            # no sub-band without energy, nor one without noise (a noiseless fit): each ln|z| at least 1e-12 of variance
+            var = np.maximum(n_ref * noise_var * share / (2 * power), 1e-12)
+            curv[p], curv_noise[p], span2 = subband_bend(zb, share, fb, var)
+            # the bias lies within ± the bound, its sign and size set by the echo's phase: its σ is that of a uniform
+            # spread over it, bound/√3. A bend beyond |c| ≈ 1/2 is more than a weaker echo gives (several, or one
+            # stronger than the path): the slope's RMS over the band, 2|c|/(2π span), the larger there, is the scale
+            # (|c|² beyond 3 of its noise σ, as the amplitude rate)
+            c4 = abs(curv[p]) ** 2 - 9 * curv_noise[p]
+            if math.isfinite(c4) and c4 > 0 and p == direct:
+                tilt[p] = max(c4**0.25 / math.sqrt(3), 2 * np.pi * math.sqrt(c4 * span2))
+        else:
+            # a sub-band the reference put no energy in (a fit on few trusted decisions): no curvature to read
+            curv[p], curv_noise[p] = complex(math.nan, math.nan), math.nan
     # each path's delay σ above is the one with the other paths at their fitted values; fitted together,
     # an echo within the pulse's width trades its gain against the path's delay
     sigma_delay = joint_delay_sigma_s(np.maximum(sigma_d, crlb_d), delays, amps, config=config, v_mps=eps * c,
                                       sound_speed_mps=c)
     order = np.argsort(delays)
-    return WholeFrameFit(
+    fit = WholeFrameFit(
         delays_s=delays[order],
         amplitudes=amps[order],
         v_mps=(eps * c)[order],
@@ -796,4 +985,13 @@ def fit_whole_frame(
         curvature_s2=curv[order],
         curvature_noise_s4=curv_noise[order],
         pilot_noise_excess=pilot_excess,
+        noise_var=noise_var,
     )
+    if split > 0:
+        def refit(trial_delays):
+            return fit_whole_frame(bb, fs, t0_s, config=config, symbols=symbols, reference=reference,
+                                   delays_s=trial_delays, v_mps=v_mps, sound_speed_mps=sound_speed_mps,
+                                   n_segments=n_segments, sweeps=sweeps, direct_s=direct_s, clean=clean)
+
+        fit = split_clusters(fit, refit, float(delays[direct]), config=config, splits=split)
+    return fit

@@ -1,0 +1,103 @@
+"""The direct path's channel bend (``WholeFrameFit.curvature_s2``) sees the direct path's own channel only.
+
+Analytic frames (tests/receive/analytic.py): paths summed directly, nothing from the project's channel code.
+The bend comes from four sub-bands B/4 wide, so (i) a path the fit does not model, several 1/B after the
+direct one, ripples them, and is taken out first (``wholeframe.unmodelled_paths``: the receiver does so
+when the ends' depths are given); (ii) the bend a merged surface image gives is what those sub-bands read
+(``wholeframe.channel_bend_s2``), not the curvature at the carrier.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from seamodem import build_frame, get_preset
+from seamodem.receive.frontend import FrontEnd, plan_front_end
+from seamodem.receive.wholeframe import (channel_bend_s2, fit_whole_frame, srrc_spectrum,
+                                         unmodelled_paths)
+
+from analytic import awgn_sigma, received_frame
+
+CFG = get_preset("jmse2024")
+FS = CFG.sample_rate_hz
+C = 1500.0
+V = 0.7
+FRAME = build_frame(CFG, b"bend")
+PLAN = plan_front_end(CFG, FS, v_max_mps=5, sound_speed_mps=C)
+# weak bottom paths below the pilot fit's 0.15 of the strongest, 2.4–4.6 symbols after the direct one
+WEAK = ((265e-6, 0.14), (407e-6, -0.12), (533e-6, 0.11))
+
+
+def _fit(seed, paths, snr_db, delays, clean=True):
+    rng = np.random.default_rng(seed)
+    ta = 0.1 + rng.uniform(0, 0.01)
+    total = int(0.5 * FS)
+    t = np.arange(total) / FS
+    x = np.zeros(total)
+    for delay, gain in paths:
+        x += received_frame(FRAME, t, t_arrival_s=ta + delay, v_mps=V, gain=gain)
+    x += awgn_sigma(CFG, snr_db) * rng.standard_normal(total)
+    fe = FrontEnd(PLAN)
+    bb = np.concatenate([fe.push(x)[0], fe.flush()[0]])
+    fit = fit_whole_frame(bb, PLAN.fs_data, 0.0, config=CFG, symbols=FRAME.symbols,
+                          reference=np.ones(len(FRAME.symbols), bool), delays_s=[ta + d for d in delays],
+                          v_mps=V, sound_speed_mps=C, direct_s=ta, clean=clean)
+    return fit, ta
+
+
+def _bend_reading(channel_paths):
+    """What the sub-bands read from the channel 1 + Σ b e^{−j2π(f₀ + f)Δ} of paths (Δ, real b) (noiseless)."""
+    rs = CFG.symbol_rate_hz
+    f = np.linspace(-(1 + CFG.rolloff) * rs / 2, (1 + CFG.rolloff) * rs / 2, 2001)
+    h = 1 + sum(b * np.exp(-2j * np.pi * (CFG.carrier_hz + f) * d) for d, b in channel_paths)
+    return channel_bend_s2(f, srrc_spectrum(f, CFG.symbol_period_s, CFG.rolloff) ** 2, h)[0]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_paths_the_fit_does_not_model_leave_the_direct_paths_bend_at_its_noise(seed):
+    fit, _ = _fit(seed, ((0.0, 1.0),) + WEAK, 8.0, delays=[0.0])
+    assert len(fit.delays_s) == 1
+    noise = float(fit.curvature_noise_s4[0])
+    # taken as the direct path's channel, the weak paths bend it far beyond its noise ...
+    assert abs(_bend_reading(WEAK)) ** 2 > 30 * noise
+    as_is, _ = _fit(seed, ((0.0, 1.0),) + WEAK, 8.0, delays=[0.0], clean=False)
+    assert abs(complex(as_is.curvature_s2[0])) ** 2 > 30 * noise
+    # ... taken out of the direct path's sub-bands first, the bend is noise's (|c|²/n exponential, mean 1)
+    assert abs(complex(fit.curvature_s2[0])) ** 2 < 9 * noise
+
+
+def test_unmodelled_paths_explains_the_paths_a_residual_holds_and_finds_none_in_noise():
+    fs = PLAN.fs_data
+    n = 4096
+    k = np.fft.fftfreq(n) * n
+    bw = CFG.symbol_rate_hz * (1 + CFG.rolloff)
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        # a template shaped as the data band's pulse (SRRC), white noise at −10 dB of it per sample (the
+        # correlation's σ 0.005 of a unit path)
+        spec = np.fft.fft(rng.standard_normal(n) + 1j * rng.standard_normal(n))
+        spec *= srrc_spectrum(k / n * fs, CFG.symbol_period_s, CFG.rolloff)
+        template = np.fft.ifft(spec)
+        scale = np.sqrt(np.mean(np.abs(template) ** 2) / 20)
+        noise = scale * (rng.standard_normal(n) + 1j * rng.standard_normal(n))
+        paths = sum(b * np.fft.ifft(spec * np.exp(-2j * np.pi * k * d * fs / n)) for d, b in WEAK)
+        found_sum, found = unmodelled_paths(paths + noise, template, fs, CFG)
+        # the paths 1.1–1.3/B apart overlap: one at a time, each lands up to ~0.4/B off, and what is left
+        # is below the noise's 4.5 σ; together they hold all but 5–8 % of the paths' energy
+        assert np.sum(np.abs(paths - found_sum) ** 2) < 0.15 * np.sum(np.abs(paths) ** 2)
+        assert len(found) >= 3 and all(lag >= 2.0 / bw for lag, _ in found)
+        assert unmodelled_paths(noise, template, fs, CFG)[1] == []
+
+
+def test_the_bend_read_is_the_sub_bands_not_the_curvature_at_the_carrier():
+    # a surface image −0.9 at 33 µs, f₀δ 0.92 cycles (near the null): ln H is no parabola over the band
+    delta = 33e-6
+    fit, _ = _fit(5, ((0.0, 1.0), (delta, -0.9)), 35.0, delays=[0.0])
+    read = _bend_reading([(delta, -0.9)])
+    z = -0.9 * np.exp(-2j * np.pi * CFG.carrier_hz * delta)
+    w = z / (1 + z)
+    at_carrier = -(delta**2) * w * (1 - w)
+    measured = complex(fit.curvature_s2[0])
+    assert abs(measured - read) < 0.1 * abs(read)
+    assert abs(measured - at_carrier) > 0.3 * abs(at_carrier)
