@@ -4,7 +4,8 @@ Run: ``python benchmarks/bench_rx_revisions.py REV [REV ...] [--repeats N]`` (e.
 
 Each revision is exported with ``git archive`` and run from there. The recordings (60 s: 20 frames
 through examples/scenarios/doppler_profile.toml; the same through straight_line.toml on a tetrahedral
-array; 20 LFM pings) are made once with the first revision. Each mode runs once per revision to warm
+array; 20 LFM pings) are made once with the first revision; the first is also run with the ends'
+depths given (the merged surface image modelled, the whole-frame fit's clusters split). Each mode runs once per revision to warm
 the numba caches, then ``--repeats`` times interleaved. The CPU time is the child's user + system
 time (os.wait4), far less sensitive to the shared machine's load than the wall time; both are
 printed as real-time factors (recording seconds per processing second), medians.
@@ -55,6 +56,7 @@ def rx_speed(trees: dict[str, Path], work: Path, *, repeats: int = 3) -> str:
     run(first, "channel", work / "p.wav", "--scenario", scen / "doppler_profile.toml", "-o", work / "p_rx.wav", "-q")
     duration = soundfile.info(str(work / "r.wav")).duration
     modes = {"measurement only": [work / "r.wav", "--no-decode"], "with decoding": [work / "r.wav"],
+             "with decoding, the ends' depths given": [work / "r.wav", "--beacon-depth", 5, "--vehicle-depth", 10],
              "--array tetra (decoding)": [work / "r4.wav", "--array", "tetra:0.08"],
              "--reference lfm": [work / "p_rx.wav", "--reference", work / "p_rx.json"]}
     times = {(m, r): [] for m in modes for r in trees}

@@ -39,7 +39,7 @@ def _fit(seed, *, split, image_gain, cluster=True):
     start = [ta, ta + (0.5 * (B_S + BS_S) if cluster else B_S)]
     fit = fit_whole_frame(bb, PLAN.fs_data, 0.0, config=CFG, symbols=FRAME.symbols,
                           reference=np.ones(len(FRAME.symbols), bool), delays_s=start, v_mps=V,
-                          sound_speed_mps=C, direct_s=ta, split=split)
+                          sound_speed_mps=C, direct_s=ta, split=split, echo_bends=True)
     bends = np.abs(fit.curvature_s2) ** 2 / fit.curvature_noise_s4
     return fit, bends, ta
 

@@ -1156,13 +1156,15 @@ class FrameMeasurer:
     def images_modelled(self) -> bool:
         """Whether a merged surface image is modelled (one-way, the ends' depths given: :meth:`merged_image`).
 
-        Only then are the paths a whole-frame fit left in its residual taken out of the direct path's bend
-        (``fit_whole_frame(clean=True)``). Without the depths, their ripple stays in it and the bend bound
-        counts it: on the corpus's far family it is that bound which covers a merged surface image's bias
-        the frames cannot show (a bend second order in the image's delay, the bias first order). Taken out
-        there too, the report seed's far range went from 1.000 to 0.879 within 3σ, worst 19.9σ (a
-        recording at 12 dB: σ 18.6 → 0.65 mm for errors of 8 mm); with the depths the image is taken out
-        instead, and so is the ripple (fading range RMS err/σ 0.63 → 0.79, far 0.31 → 0.42)."""
+        Only then are echoes that are clusters split and the paths a whole-frame fit left in its residual
+        taken out of the direct path's bend (``fit_whole_frame(split=2, clean=True)``). Without the depths,
+        a cluster's misfit and the unmodelled paths' ripple stay in the bend and the bend bound counts
+        them: on the corpus's far family it is that bound which covers a merged surface image's bias the
+        frames cannot show (a bend second order in the image's delay, the bias first order). Done there
+        too, the far range within 3σ went from 1.000 to 0.879 on the report seed, worst 19.9σ (a recording
+        at 12 dB: σ 18.6 → 0.65 mm for errors of 8 mm), and the split alone took a fresh seed's from 0.925
+        to 0.896; with the depths the image is taken out instead, and so are the misfit and the ripple
+        (the depth report's fading range RMS err/σ 0.63 → 0.79, far 0.31 → 0.43)."""
         s = self.settings
         return s.turnaround_s is None and s.beacon_depth_m is not None and s.vehicle_depth_m is not None
 
@@ -1359,7 +1361,8 @@ class FrameMeasurer:
         try:
             wf: WholeFrameFit = fit_whole_frame(bb, fs, t0_s, config=cfg, symbols=symbols, reference=reference,
                                                 delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,
-                                                sound_speed_mps=c, direct_s=paths.first_s, split=2,
+                                                sound_speed_mps=c, direct_s=paths.first_s,
+                                                split=2 if self.images_modelled else 0,
                                                 clean=self.images_modelled)
         except ValueError:  # too few trusted symbols
             return None

@@ -113,8 +113,8 @@ class WholeFrameFit:
         energy (decisions all alike: its spectrum a line at 0 Hz). With ``clean``, the direct path's is read
         after the paths the fit left in its residual, 2/B after it and later, are taken out
         (:func:`unmodelled_paths`).
-        Each echo at least 0.2 of the strongest path's amplitude has its own (its bend is a cluster's:
-        :func:`split_clusters`); NaN for the weaker ones.
+        With ``echo_bends``, each echo at least 0.2 of the strongest path's amplitude has its own (its bend
+        is a cluster's: :func:`split_clusters`); NaN for the other echoes.
     curvature_noise_s4 : numpy.ndarray
         That noise expectation [s⁴] (circular: half of it per component of c),
         also the σ of the unbiased fourth power on a channel without curvature.
@@ -704,6 +704,7 @@ def fit_whole_frame(
     direct_s: float | None = None,
     split: int = 0,
     clean: bool = False,
+    echo_bends: bool | None = None,
 ) -> WholeFrameFit:
     """Fit every path's gain, mean Doppler and drift over the whole frame.
 
@@ -737,6 +738,8 @@ def fit_whole_frame(
         Read the direct path's bend after the paths the fit left in its residual, 2/B
         after it and later, are taken out (:func:`unmodelled_paths`). The receiver
         does so when the ends' depths are given (``FrameMeasurer``).
+    echo_bends : bool, optional
+        Read each echo's own bend too (``curvature_s2``; default: with ``split``).
     """
     c = sound_speed_mps
     f0 = config.carrier_hz
@@ -932,12 +935,14 @@ def fit_whole_frame(
     # in f; the RMS of its slope over the band (less the noise's) as a delay: a merged echo b at Δ makes the
     # channel 1 + b e^{−j2πfΔ}, whose log-amplitude slope and group-delay error (the arrival's bias) are the
     # imaginary and real parts of one number (the curvature brings in the real part where the slope is 0)
-    # (the same for every echo as strong as _BEND_MIN_FRACTION of the strongest path: a bend there is a cluster
-    # of paths fitted as one, which fit_whole_frame's ``split`` resolves; its tilt is not counted)
+    # (with echo_bends, the same for every echo as strong as _BEND_MIN_FRACTION of the strongest path: a bend
+    # there is a cluster of paths fitted as one, which ``split`` resolves; its tilt is not counted)
     direct = int(np.argmin(delays if direct_s is None else np.abs(delays - direct_s)))
     strongest = float(np.max(np.abs(amps)))
+    if echo_bends is None:
+        echo_bends = split > 0
     for p in range(n_paths):
-        if p != direct and not abs(amps[p]) >= _BEND_MIN_FRACTION * strongest:
+        if p != direct and not (echo_bends and abs(amps[p]) >= _BEND_MIN_FRACTION * strongest):
             curv[p], curv_noise[p] = complex(math.nan, math.nan), math.nan
             continue
         r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
@@ -991,7 +996,8 @@ def fit_whole_frame(
         def refit(trial_delays):
             return fit_whole_frame(bb, fs, t0_s, config=config, symbols=symbols, reference=reference,
                                    delays_s=trial_delays, v_mps=v_mps, sound_speed_mps=sound_speed_mps,
-                                   n_segments=n_segments, sweeps=sweeps, direct_s=direct_s, clean=clean)
+                                   n_segments=n_segments, sweeps=sweeps, direct_s=direct_s, clean=clean,
+                                   echo_bends=True)
 
         fit = split_clusters(fit, refit, float(delays[direct]), config=config, splits=split)
     return fit
