@@ -330,9 +330,8 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     step = np.where(den < 0, 0.5 * (ym - yp) / np.where(den < 0, den, -1.0), 0.0)
     peaks = taus[i] + np.clip(step, -0.5, 0.5) * (taus[1] - taus[0])
     # the bend the whole-frame fit reads from each (its sub-band parabolas: near the null ln H is no parabola
-    # over the band, and the fit's c exceeds −δ²·w(1 − w), the curvature at f₀, by 5–50 %: a corpus far
-    # recording at 6 dB, the image 22 µs behind, kept a residual bend of 2–5 times its noise in every frame,
-    # which the coherent pool counted as a 20 mm bound on errors of 1–4 mm)
+    # over the band, and the fit's c exceeds −δ²·w(1 − w), the curvature at f₀, by 5–50 %; an analytic frame
+    # near the null reads channel_bend_s2's value: tests/receive/test_channel_bend.py)
     f_fine = np.linspace(f[0], f[-1], 641)
     curvature = channel_bend_s2(f_fine, srrc_spectrum(f_fine, period, float(config.rolloff)) ** 2,
                                 1 + z[:, None] * np.exp(-2j * np.pi * f_fine[None, :] * lags[:, None]))

@@ -595,8 +595,7 @@ def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config:
     import scipy.fft
 
     n = len(resid)
-    bw = config.symbol_rate_hz * (1 + config.rolloff)
-    near = _MISSED_AFTER_B * fs / bw  # [samples]
+    near = _MISSED_AFTER_B * fs / config.bandwidth_hz  # [samples]
     hi = min(float(n - 1), config.n_pilot * config.symbol_period_s * fs)
     energy = float(np.sum(np.abs(template) ** 2))
     if not energy > 0 or hi <= near:
@@ -662,7 +661,7 @@ def split_clusters(fit: WholeFrameFit, refit, direct_s: float, *, config: FrameC
     splits : int
         Most echoes split, one after the other.
     """
-    width_s = _SPLIT_WIDTH / (config.symbol_rate_hz * (1 + config.rolloff))
+    width_s = _SPLIT_WIDTH / config.bandwidth_hz
     for _ in range(splits):
         if fit.curvature_s2 is None:
             break
