@@ -8,6 +8,8 @@ its own Doppler) moves the speeds and not the ranges: the check sees it where no
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -258,3 +260,37 @@ def test_an_echo_taken_next_to_the_recordings_end_is_put_on_the_right_record(las
     other = n - 2 if last else n - 1
     assert out[off].sigma_range_m > 5.0, [r.sigma_range_m for r in out]
     assert out[other].sigma_range_m < 0.01, [r.sigma_range_m for r in out]
+
+
+def test_a_first_frames_image_doppler_term_is_settled_with_the_pooled_rate():
+    # a far recording with the depths: its first frame's whole-frame v_r took the fading rate and the merged
+    # image's Doppler term (which reads that rate through |Re w/Im w|) from its own rate alone, the pool still
+    # empty. Settled, the record's σ is the one the pool's rate gives both terms, not the fading term alone
+    from types import SimpleNamespace
+
+    from seamodem.receive.frame import RecordLookahead, fade_image_term_mps, merged_image_bias_s
+    from seamodem.receive.records import MeasurementRecord
+
+    image = merged_image_bias_s(800.0, 3.0, 3.0, config=CFG, sound_speed_mps=C)  # f₀δ 0.42: w nearly real
+    own, pooled, noise = 0.01, 0.3, 4e-4  # [Hz], [Hz], the fit's own σ [m/s]
+    meas = SimpleNamespace(config=CFG, settings=SimpleNamespace(sound_speed_mps=C), pooled_merge_delay_s=0.0,
+                           pooled_fade_rate_hz=pooled, last_shape=None)
+    term = {rate: fade_image_term_mps(rate, image, meas) for rate in (own, pooled)}
+    fade_only = {rate: fade_image_term_mps(rate, None, meas) for rate in (own, pooled)}
+    assert term[pooled] > 2 * fade_only[pooled]  # the image's term is most of it at this rate
+    look = RecordLookahead(meas, 5)
+    out, v = [], 0.9
+    for k in range(8):
+        t = 0.1 + k
+        r = 700 - v * k
+        rec = MeasurementRecord(frame_index=k, t_emit_s=t, t_arrival_s=t + r / C, tof_s=r / C, range_m=r,
+                                v_r_mps=v, snr_db=15, v_r_tone_eq9_mps=v, v_r_bank_mps=v, detection_z=9,
+                                detection_rho=0.5, sigma_range_m=0.01, sigma_v_r_mps=math.hypot(noise, term[own]),
+                                sigma_v_r_bank_mps=0.01, tone_c_n0_dbhz=60)
+        meas.last_shape = (0.0, C, (own, own, image), 1e-3 / C)
+        out += look.push(rec)
+    out += look.flush()
+    sig = np.array([r.sigma_v_r_mps for r in out])
+    np.testing.assert_allclose(sig, math.hypot(noise, term[pooled]), rtol=1e-9)
+    # (the fading term alone settled, as before: the image's term stayed at its own rate's)
+    assert np.all(sig > 1.5 * math.sqrt(noise**2 + term[own] ** 2 + fade_only[pooled] ** 2 - fade_only[own] ** 2))

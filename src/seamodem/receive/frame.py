@@ -346,8 +346,12 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
 
 
 #: the direct path's κ (``joint_delay_inflation``) beyond which other fitted paths couple to its arrival, and
-#: the surface image alone does not predict its bias (the whole-frame fit's joint steps take the same 1.05)
-_IMAGE_ALONE_KAPPA = 1.05
+#: the surface image alone does not predict its bias: its delay δ is then the σ, not its bias taken out. Measured
+#: on the corpus's far family with the depths (two seeds, 300 rows each): at κ 1.05–1.5 (111 and 51 rows, paths
+#: about 1.6–2.2/B from the direct one) the image's bias taken out left every range within 3σ (worst 1.3σ),
+#: the range σ's median 23–25 → 11–15 mm; at κ 1.5–2, one row in 34 and one in 20 at 3.2σ. (1.05 before: the
+#: whole-frame fit's joint-step trigger, borrowed without a measurement.)
+_IMAGE_ALONE_KAPPA = 1.5
 
 
 def direct_path_kappa(delays_s, amplitudes, first: int, config: FrameConfig, *, v_mps=None,
@@ -379,6 +383,18 @@ def image_doppler_sigma_mps(image: MergedImage, amp_rate_hz: float, config: Fram
     shown = fade * image.re_w / image.im_w if image.im_w > 0 else math.inf
     sigma = min(bound, shown)
     return math.sqrt(max(0.0, sigma**2 - fade**2)) if math.isfinite(sigma) else 0.0
+
+
+def fade_image_term_mps(rate_hz: float, image: MergedImage | None, measurer: FrameMeasurer) -> float:
+    """The whole-frame v_r's σ terms [m/s] that read the direct path's log-amplitude rate ``rate_hz``: the
+    fading term (``unmodelled_sigmas``) and a merged image's Doppler term beyond it
+    (:func:`image_doppler_sigma_mps`), in quadrature: what ``RecordLookahead`` replaces when it settles
+    the rate."""
+    c = measurer.settings.sound_speed_mps
+    fade = _K_FADE * c / (2 * math.pi * measurer.config.carrier_hz) * rate_hz
+    if image is None:
+        return fade
+    return math.hypot(fade, image_doppler_sigma_mps(image, rate_hz, measurer.config, sound_speed_mps=c))
 
 
 def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *, echoes: bool) -> float:
@@ -946,9 +962,11 @@ class FrameMeasurer:
             maxlen=_ECHO_POOL_FRAMES)
         self._last_amplitude: tuple[float, float, float] | None = None
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
-        #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate and the rate its v_r
-        #: took [Hz] (None: v_r not from a fit); :class:`RecordLookahead` settles them with later frames
-        self.last_shape: tuple[float, float, tuple[float, float] | None, float] = (0.0, 0.0, None, 0.0)
+        #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate, the rate its v_r took [Hz]
+        #: and the merged image its Doppler term read it with (None: v_r not from a fit); :class:`RecordLookahead`
+        #: settles them with later frames
+        self.last_shape: tuple[float, float, tuple[float, float, MergedImage | None] | None, float] = (
+            0.0, 0.0, None, 0.0)
 
     @property
     def pooled_merge_delay_s(self) -> float:
@@ -1071,7 +1089,8 @@ class FrameMeasurer:
         # the pilot's arrival: its CRLB and the pull of the echoes it did not model (the fit's, where one was made)
         sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_pilot_pull"))
         noise_tau = sigma_tau  # the arrival's σ of noise, frame to frame (RecordLookahead's kinematic check)
-        fade_rates = doppler.pop("fade_rates_hz", None)  # (the fit's own, the one its v_r took): RecordLookahead
+        # (the fit's own, the one its v_r took, the merged image its Doppler term used): RecordLookahead
+        fade_rates = doppler.pop("fade_rates_hz", None)
         # a fit not used still showed the direct path's channel (tilt, timing scatter): the pilot's arrival
         # sees the same channel
         unmodelled = doppler.pop("sigma_tau_unmodelled", 0.0)
@@ -1320,7 +1339,7 @@ class FrameMeasurer:
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first]),
-                        fade_rates_hz=(own_rate, max(own_rate, pooled_rate))), \
+                        fade_rates_hz=(own_rate, max(own_rate, pooled_rate), image)), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape,
                  direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
                  if self.settings.beacon_depth_m is not None else 1.0)
@@ -1514,7 +1533,8 @@ class RecordLookahead:
         return out
 
     def _settle(self, record: MeasurementRecord,
-                shape: tuple[float, float, tuple[float, float] | None, float]) -> MeasurementRecord:
+                shape: tuple[float, float, tuple[float, float, MergedImage | None] | None, float]
+                ) -> MeasurementRecord:
         used_s, metres_per_s, fade, noise_s = shape
         meas = self.measurer
         later_s = _K_MERGE * meas.pooled_merge_delay_s
@@ -1574,11 +1594,14 @@ class RecordLookahead:
             # it) in place of the pool before it: the first frames of a recording have no earlier ones (a far
             # recording's first frame 1.9 mm/s off with σ 0.4 where the next frames' σ was 1.2–2), and the
             # larger of two pools' noise would inflate the rest. The frame's own rate stays the floor.
-            own_hz, used_hz = fade
-            to_mps = _K_FADE * meas.settings.sound_speed_mps / (2 * math.pi * meas.config.carrier_hz)
+            # A merged surface image's Doppler term (image_doppler_sigma_mps) reads the same rate, and is
+            # settled with it: a far recording's first frame, the pool still empty, took it from its own rate
+            # alone (the depths given: 2.7–6.3 mm/s off with σ 0.6–2.0, 3.2–4.6σ)
+            own_hz, used_hz, image = fade
             settled_hz = max(own_hz, meas.pooled_fade_rate_hz)
             if settled_hz != used_hz:
-                var_v = record.sigma_v_r_mps**2 + to_mps**2 * (settled_hz**2 - used_hz**2)
+                var_v = (record.sigma_v_r_mps**2 + fade_image_term_mps(settled_hz, image, meas) ** 2
+                         - fade_image_term_mps(used_hz, image, meas) ** 2)
                 changes["sigma_v_r_mps"] = math.sqrt(max(var_v, 0.0))
         if nb is not None:
             # the speed against its neighbours' ranges (its own gap, and theirs pooled; not through a range
