@@ -100,8 +100,8 @@ def test_frames_read_from_the_tone_share_the_pooled_bend(monkeypatch):
     whole_frame = FrameMeasurer._whole_frame
     late = 5.0  # [s]: frames heard after it get no fit
 
-    def fit_early_frames_only(self, m, dec, bb, t0_s, fs):
-        return whole_frame(self, m, dec, bb, t0_s, fs) if m.pilot.t_start_s < late else None
+    def fit_early_frames_only(self, m, dec, bb, t0_s, fs, image=None):
+        return whole_frame(self, m, dec, bb, t0_s, fs, image) if m.pilot.t_start_s < late else None
 
     monkeypatch.setattr(FrameMeasurer, "_whole_frame", fit_early_frames_only)
     delta = 0.5 / CFG.carrier_hz

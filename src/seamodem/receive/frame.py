@@ -1241,7 +1241,8 @@ class FrameMeasurer:
         sigma_bank = float(pilot_velocity_crlb_mps(self.config, snr_direct_db, sound_speed_mps=c)) * math.sqrt(excess)
         gap = abs(v_tone - m.pilot.v_mps)
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
-        fit = self._whole_frame(m, dec, bb, t0_s, fs) if dec is not None and self.settings.whole_frame_doppler else None
+        fit = (self._whole_frame(m, dec, bb, t0_s, fs, image)
+               if dec is not None and self.settings.whole_frame_doppler else None)
         if fit is not None and fit[2] == "whole_frame":
             # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
@@ -1355,8 +1356,11 @@ class FrameMeasurer:
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
                     n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_unmodelled), None
 
-    def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float):
-        """(WholeFrameFit, index of the first path, source) of a decoded frame, or None."""
+    def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float,
+                     image: MergedImage | None = None):
+        """(WholeFrameFit, index of the first path, source) of a decoded frame, or None. A merged surface
+        image (:meth:`merged_image`) is projected out of the residual's correlation before the paths left
+        in it are sought (``fit_whole_frame(clean_lags_s=…)``)."""
         cfg, c = self.config, self.settings.sound_speed_mps
         if dec.crc_ok:
             data = build_frame(cfg, dec.payload).data_symbols
@@ -1381,7 +1385,9 @@ class FrameMeasurer:
                                                 delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,
                                                 sound_speed_mps=c, direct_s=paths.first_s,
                                                 split=2 if self.images_modelled else 0,
-                                                clean=self.images_modelled)
+                                                clean=self.images_modelled,
+                                                clean_lags_s=() if image is None else
+                                                (-image.bias_s, image.delay_s - image.bias_s))
         except ValueError:  # too few trusted symbols
             return None
         first = int(np.argmin(np.abs(wf.delays_s - paths.first_s)))

@@ -111,7 +111,7 @@ class WholeFrameFit:
         gain and delay, so a channel whose echo stays put also adds coherently
         over frames. NaN (both) when the reference left a sub-band without
         energy (decisions all alike: its spectrum a line at 0 Hz). With ``clean``, the direct path's is read
-        after the paths the fit left in its residual, 2/B after it and later, are taken out
+        after the paths the fit left in its residual, 1.5/B after it and later, are taken out
         (:func:`unmodelled_paths`).
         With ``echo_bends``, each echo at least 0.2 of the strongest path's amplitude has its own (its bend
         is a cluster's: :func:`split_clusters`); NaN for the other echoes.
@@ -336,8 +336,12 @@ _IDENTIFIABLE_KAPPA = 50.0
 _N_BANDS = 4
 #: the paths a fit left in its residual (``unmodelled_paths``) are taken out of the direct path's sub-bands from
 #: this many 1/B after it on: nearer, the residual of a merged echo fitted with the direct path (its pulse's
-#: derivative) peaks (a far recording at 6 dB, a surface image 22 µs behind: peaks 0.09–0.15 at 100–124 µs)
-_MISSED_AFTER_B = 2.0
+#: derivative) peaks (a far recording at 6 dB, a surface image 22 µs behind: peaks 0.09–0.15 at 100–124 µs,
+#: 0.9–1.1/B; near the null, out to 1.8–1.9/B: a surface image the depths give is projected out first,
+#: ``unmodelled_paths(known_lags_s=…)``). 2/B before session 19: a bottom path and its surface image at 1.7 and
+#: 2.2/B, found as one component at 1.9/B (0.12 of the direct path), stayed in the sub-bands and bent them 7
+#: times their noise, a 23 mm bound on ranges within 1 mm (the corpus's far family, the depths given)
+_MISSED_AFTER_B = 1.5
 #: echoes at least this share of the strongest path's amplitude get their own channel's curvature
 _BEND_MIN_FRACTION = 0.2
 #: an echo whose bend |c|²/noise exceeds this is split (noise alone: exponential, beyond 9 in 1.2e-4 of fits)
@@ -571,7 +575,8 @@ def channel_bend_s2(f_hz: np.ndarray, energy: np.ndarray, channel: np.ndarray, n
 
 
 def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config: FrameConfig, *,
-                     deviations: float = 4.5, max_components: int = 16) -> tuple[np.ndarray, list]:
+                     deviations: float = 4.5, max_components: int = 16,
+                     known_lags_s: tuple = ()) -> tuple[np.ndarray, list]:
     """The paths a fit left in its residual from :data:`_MISSED_AFTER_B`/B after the direct path on, found one
     after the other (CLEAN): (their sum on the residual's grid, [(lag [s], amplitude)]).
 
@@ -585,6 +590,12 @@ def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config:
     its pulse's derivative) are taken out of the correlation only, so that their sidelobes are not read
     as paths (at 60 dB, an image −0.9 at 8 µs: its misfit's sidelobes, taken for paths, bent the channel
     read 10× in its phase); the farther ones are the paths returned.
+
+    ``known_lags_s``: lags [s] relative to the template of paths merged with it that the receiver models (a
+    surface image from the ends' depths: the direct path at −bias, the image at δ − bias). A fit of one
+    path to them leaves a misfit within the span of their pulses and the template's, whose sidelobes reach
+    1.8–1.9/B near the null (−0.9 at 33 µs); those pulses are projected out of the correlation before the
+    search, so that only paths are found.
 
     The sub-band sums of the direct path's channel (its bend, ``curvature_s2``) see every unmodelled path
     within a few 1/B: a sub-band is B/4 wide, so a path at Δ ripples it by its amplitude times
@@ -606,6 +617,11 @@ def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config:
     c_spec = scipy.fft.fft(resid, m) * np.conj(t_spec) / energy  # the correlation's spectrum, at path scale
     own = np.abs(t_spec) ** 2 / energy  # one unit path at lag 0
     var = float(np.mean(np.abs(resid) ** 2)) / energy
+    if len(known_lags_s):
+        # the modelled paths' pulses (and the template's own) out of the correlation: their misfit is no path
+        basis = own[:, None] * np.exp(-2j * np.pi * k[:, None] * np.concatenate([[0.0], known_lags_s])[None, :]
+                                      * fs / m)
+        c_spec = c_spec - basis @ np.linalg.lstsq(basis, c_spec, rcond=None)[0]
     up = 4
     lags = np.arange(-int(near * up), int(hi * up) + 1)  # [samples / up], negative ones wrapped
     half = m // 2
@@ -703,6 +719,7 @@ def fit_whole_frame(
     direct_s: float | None = None,
     split: int = 0,
     clean: bool = False,
+    clean_lags_s: tuple = (),
     echo_bends: bool | None = None,
 ) -> WholeFrameFit:
     """Fit every path's gain, mean Doppler and drift over the whole frame.
@@ -734,9 +751,13 @@ def fit_whole_frame(
         Most echoes that are clusters of paths split in two, the frame fitted again
         each time (:func:`split_clusters`; default none).
     clean : bool
-        Read the direct path's bend after the paths the fit left in its residual, 2/B
+        Read the direct path's bend after the paths the fit left in its residual, 1.5/B
         after it and later, are taken out (:func:`unmodelled_paths`). The receiver
         does so when the ends' depths are given (``FrameMeasurer``).
+    clean_lags_s : tuple of float
+        Lags [s] after the direct path's fitted arrival of paths merged with it that
+        are modelled (the surface image from the ends' depths: −bias and δ − bias),
+        projected out before the paths are sought (:func:`unmodelled_paths`).
     echo_bends : bool, optional
         Read each echo's own bend too (``curvature_s2``; default: with ``split``).
     """
@@ -947,7 +968,8 @@ def fit_whole_frame(
         r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
         if clean and p == direct and abs(amps[p]) > 0:
             # less the paths the fit left in its residual: they ripple the sub-bands (unmodelled_paths)
-            r_p = r_p - unmodelled_paths(resid, (models[p] if n_paths > 1 else total) / amps[p], fs, config)[0]
+            r_p = r_p - unmodelled_paths(resid, (models[p] if n_paths > 1 else total) / amps[p], fs, config,
+                                         known_lags_s=tuple(clean_lags_s))[0]
         inst_p = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx]
         strip = np.exp(-1j * path_phase(config, inst_p - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
         zb, share, fb = seg.band_sums(r_p, inst_p, strip, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
@@ -996,6 +1018,7 @@ def fit_whole_frame(
             return fit_whole_frame(bb, fs, t0_s, config=config, symbols=symbols, reference=reference,
                                    delays_s=trial_delays, v_mps=v_mps, sound_speed_mps=sound_speed_mps,
                                    n_segments=n_segments, sweeps=sweeps, direct_s=direct_s, clean=clean,
+                                   clean_lags_s=clean_lags_s,
                                    echo_bends=True)
 
         fit = split_clusters(fit, refit, float(delays[direct]), config=config, splits=split)
