@@ -88,6 +88,10 @@ def test_unmodelled_paths_explains_the_paths_a_residual_holds_and_finds_none_in_
         assert np.sum(np.abs(paths - found_sum) ** 2) < 0.15 * np.sum(np.abs(paths) ** 2)
         assert len(found) >= 3 and all(lag >= 1.5 / bw for lag, _ in found)
         assert unmodelled_paths(noise, template, fs, CFG)[1] == []
+        # a modelled image's pulses projected out first (the direct path at −5 µs, the image at 25 µs): the
+        # paths 2.4–4.8/B after it are found as well
+        found_sum, found = unmodelled_paths(paths + noise, template, fs, CFG, known_lags_s=(-5e-6, 25e-6))
+        assert np.sum(np.abs(paths - found_sum) ** 2) < 0.15 * np.sum(np.abs(paths) ** 2)
 
 
 def test_the_bend_read_is_the_sub_bands_not_the_curvature_at_the_carrier():
