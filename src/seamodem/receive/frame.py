@@ -1343,7 +1343,7 @@ class FrameMeasurer:
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate), image)), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape,
                  direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
-                 if self.settings.beacon_depth_m is not None else 1.0)
+                 if self.images_modelled else 1.0)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
