@@ -396,3 +396,32 @@ def test_a_files_first_records_wait_for_the_curvature_pool(n_records, counts_fro
     # a live receiver (no look-ahead) gives each record out at once, as measured
     meas, live = _lookahead(0)
     assert live.push(_track_record(0)) == [_track_record(0)]
+
+
+@pytest.mark.parametrize("range_m, z_b, z_v", [(800.0, 3.0, 3.0), (600.0, 1.5, 5.0), (700.0, 2.0, 4.0),
+                                                (400.0, 2.0, 2.0)])
+def test_the_image_a_bend_shows_has_the_geometrys_doppler_term(range_m, z_b, z_v):
+    # without the depths, the Doppler term of the image a pooled bend shows (bend_image) against the one the
+    # depths give (merged_image_bias_s), for images away from the null (|Re w| ≈ 0.47): the bend of the
+    # geometry's image, pooled (its bound's σ |c|^½/√3), gives the same term within the unknown phase's
+    # and depths' share (measured 0.77–0.92 of it)
+    from seamodem.receive.frame import bend_image, merged_image_bias_s
+
+    image = merged_image_bias_s(range_m, z_b, z_v, config=CFG, sound_speed_mps=C)
+    assert image.re_w > 0.4
+    pooled = abs(image.curvature_s2) ** 0.5 / np.sqrt(3)
+    shown = bend_image(pooled, range_m, config=CFG, sound_speed_mps=C)
+    assert shown.from_bend and shown.bias_s == 0.0 and shown.curvature_s2 == 0
+    ratio = (shown.re_w * shown.wave_doppler_mps) / (image.re_w * image.wave_doppler_mps)
+    assert 0.6 < ratio < 1.5, ratio
+    assert shown.delay_s == pytest.approx(image.delay_s, rel=0.3)
+
+
+def test_no_bend_no_image_and_its_delay_stays_merged():
+    from seamodem.receive.frame import bend_image
+
+    assert bend_image(0.0, 800.0, config=CFG, sound_speed_mps=C) is None
+    assert bend_image(5e-6, float("nan"), config=CFG, sound_speed_mps=C) is None
+    # a bend bound far beyond a merged echo's: the delay stops at the resolution 1/B
+    wide = bend_image(1e-3, 800.0, config=CFG, sound_speed_mps=C)
+    assert wide.delay_s == pytest.approx(1 / CFG.bandwidth_hz)

@@ -260,6 +260,9 @@ class MergedImage(NamedTuple):
     wave_doppler_mps: float = 0.0
     #: the image's extra delay δ at the geometry [s] (:func:`merged_image_delay_s`; 0: no merged image)
     delay_s: float = 0.0
+    #: True for an image the channel's pooled bend shows without the depths (:func:`bend_image`): only its
+    #: Doppler term is known, nothing of it is taken out
+    from_bend: bool = False
 
     def residual_bend(self, bend: complex, noise: float) -> tuple[complex, float]:
         """A measured bend (``WholeFrameFit.curvature_s2``, its noise expectation) less the image's mean bend,
@@ -345,6 +348,56 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
                        wave_doppler_mps=2 * sin_grazing * wave_speed, delay_s=delta)
 
 
+#: a merged surface image's |w(1 − w)| and |Re w| (w = z/(1 + z), z = −ρ·e^{−j2πf₀δ}) over its unknown phase:
+#: their medians over the phase at ρ 0.8, 0.89 and 0.98 (:data:`SURFACE_REFLECTION`) are 0.49–0.50 and
+#: 0.42–0.49 (:func:`bend_image`)
+_BEND_W_1MW, _BEND_RE_W = 0.5, 0.46
+#: |Re w / Im w| a bend's image is taken to have (:func:`bend_image`): its Doppler term reads the direct
+#: path's log-amplitude rate as up to twice that in phase rate, within the waves' bound. Its phase unknown,
+#: the ratio is spread from 0.16 to 6.3 (10–90 %, ρ 0.89), below 2 at 70 % of phases. Measured on the
+#: corpus's far family without the depths (two seeds, 15 recordings each; 1 is no term): within 3σ
+#: 0.942 / 0.986 / 1.000 / 1.000 at 1 / 2 / 3 / ∞ and 0.971 / 0.979 / 0.993 / 1.000, median σ/RMS error
+#: 0.77 / 0.87 / 1.16 / 2.90 and 0.78 / 1.38 / 2.05 / 3.37: beyond 2, σ grew to several times the errors
+_BEND_RE_IM = 2.0
+
+
+def bend_image(merge_delay_s: float, range_m: float, *, config: FrameConfig, sound_speed_mps: float,
+               wave_amplitude_m: float = WAVE_AMPLITUDE_M, wave_period_s: float = WAVE_PERIOD_S
+               ) -> MergedImage | None:
+    """Without the ends' depths: the surface image a channel bend pooled over recent frames shows, as far as
+    its Doppler term goes (:func:`image_doppler_sigma_mps`); None when the pool shows no bend.
+
+    The pool's bias bound (``_CurvaturePool.delay_s``, the σ of a uniform spread over |c̄|^½) gives the
+    echo's delay: |c| = δ²·|w(1 − w)|, and |w(1 − w)| is about ½ over most of the image's phase, so
+    δ ≈ √3·σ/√½ (at most the resolution 1/B). A surface image that far behind at the slant range R has its
+    ends' depths' product δ·R·c/2, and its grazing angle is least when the depths are equal:
+    sin θ ≥ √(2·c·δ/R). The waves move such an image by 2·sin θ times the surface's vertical speed
+    (``wave_amplitude_m`` at ``wave_period_s``, as :func:`merged_image_bias_s`), the sum's phase rate by
+    |Re w| of that (its median, 0.46) and its log-amplitude rate by |Im w|. With the phase unknown, the
+    amplitude's rate counts up to :data:`_BEND_RE_IM` (2) times as a phase rate, within that bound: the
+    image's Doppler term (:func:`image_doppler_sigma_mps`). With the depths it is
+    :func:`merged_image_bias_s`'s instead. Nothing else of it is used: its bias stays in the bend bound.
+
+    Measured on the corpus's far family without the depths: v_r 3–6 mm/s off with σ 0.8–1.4 mm/s at
+    15–18 dB, where the bend was pooled and the waves turned the image's phase; within 3σ 0.942 → 0.986
+    and 0.971 → 0.979 on two seeds (docs/performance.md).
+
+    >>> from seamodem import get_preset
+    >>> image = bend_image(8.5e-6, 877.0, config=get_preset("jmse2024"), sound_speed_mps=1500.0)
+    >>> round(image.delay_s * 1e6, 1), round(image.re_w * image.wave_doppler_mps * 1e3, 1)  # [µs], [mm/s]
+    (20.8, 5.7)
+    >>> bend_image(0.0, 877.0, config=get_preset("jmse2024"), sound_speed_mps=1500.0) is None
+    True
+    """
+    if not (merge_delay_s > 0 and math.isfinite(range_m) and range_m > 0):
+        return None
+    delta = min(math.sqrt(3.0 / _BEND_W_1MW) * merge_delay_s, 1.0 / config.bandwidth_hz)
+    sin_grazing = min(1.0, math.sqrt(2 * sound_speed_mps * delta / range_m))
+    wave_speed = 2 * math.pi * wave_amplitude_m / wave_period_s / math.sqrt(2)
+    return MergedImage(0.0, 0.0, 0j, 0.0, re_w=_BEND_RE_W, im_w=_BEND_RE_W / _BEND_RE_IM,
+                       wave_doppler_mps=2 * sin_grazing * wave_speed, delay_s=delta, from_bend=True)
+
+
 #: the direct path's κ (``joint_delay_inflation``) beyond which other fitted paths couple to its arrival, and
 #: the surface image alone does not predict its bias: its delay δ is then the σ, not its bias taken out. Measured
 #: on the corpus's far family with the depths (two seeds, 300 rows each): at κ 1.05–1.5 (111 and 51 rows, paths
@@ -395,6 +448,16 @@ def fade_image_term_mps(rate_hz: float, image: MergedImage | None, measurer: Fra
     if image is None:
         return fade
     return math.hypot(fade, image_doppler_sigma_mps(image, rate_hz, measurer.config, sound_speed_mps=c))
+
+
+def bend_image_term_mps(fade: tuple[float, float, MergedImage | None] | None, measurer: FrameMeasurer) -> float:
+    """The Doppler term [m/s] a record's v_r σ took from the image a bend showed without the depths
+    (:func:`bend_image`), read from its fading rates ``fade`` (``FrameMeasurer.last_shape``'s: the rate
+    used and the image); 0 without one."""
+    if fade is None or fade[2] is None or not fade[2].from_bend:
+        return 0.0
+    return image_doppler_sigma_mps(fade[2], fade[1], measurer.config,
+                                   sound_speed_mps=measurer.settings.sound_speed_mps)
 
 
 def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *, echoes: bool) -> float:
@@ -1197,6 +1260,18 @@ class FrameMeasurer:
                                     wave_period_s=s.wave_period_s)
         return image if image.delay_s > 0 else None
 
+    def doppler_image(self, range_m: float) -> MergedImage | None:
+        """The merged surface image whose Doppler term the whole-frame v_r's σ takes at ``range_m``: with the
+        ends' depths, :meth:`merged_image`; one-way without them, the one the channel's pooled bend shows
+        (:func:`bend_image`); None without one."""
+        s = self.settings
+        if self.images_modelled:
+            return self.merged_image(range_m)
+        if s.turnaround_s is not None:
+            return None
+        return bend_image(self.pooled_merge_delay_s, range_m, config=self.config, sound_speed_mps=s.sound_speed_mps,
+                          wave_amplitude_m=s.wave_amplitude_m, wave_period_s=s.wave_period_s)
+
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
                  excess: float, snr_direct_db: float, range_m: float = math.nan
                  ) -> tuple[dict, tuple[float, float, float, float] | None]:
@@ -1315,9 +1390,12 @@ class FrameMeasurer:
                                               image=image)
             own_rate = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
             sigma = math.hypot(sigma, sigma_v_un)
-            if image is not None:
-                sigma = math.hypot(sigma, image_doppler_sigma_mps(image, max(own_rate, pooled_rate), self.config,
-                                                                  sound_speed_mps=c))
+            # a merged surface image's Doppler: with the depths, the image's; without them, the one a bend
+            # pooled over recent frames shows (this frame's in the pool)
+            doppler_image = image if image is not None else self.doppler_image(range_m)
+            if doppler_image is not None:
+                sigma = math.hypot(sigma, image_doppler_sigma_mps(doppler_image, max(own_rate, pooled_rate),
+                                                                  self.config, sound_speed_mps=c))
             # the pilot bank is the same path's own estimate: a gap beyond 3 combined σ is unmodelled too
             # (the bank's σ with the pull of the echoes the fit sees over the pilot: without it, the steep
             # family's decoded rows took 40–110 mm/s of σ from a bank 0.1 m/s off, their error 0.1–0.9 mm/s)
@@ -1340,7 +1418,7 @@ class FrameMeasurer:
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first]),
-                        fade_rates_hz=(own_rate, max(own_rate, pooled_rate), image)), \
+                        fade_rates_hz=(own_rate, max(own_rate, pooled_rate), doppler_image)), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape,
                  direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
                  if self.images_modelled else 1.0)
@@ -1430,6 +1508,9 @@ class _Neighbours(NamedTuple):
     records: list
     #: the record's place among them
     index: int
+    #: the speeds' σ's without the Doppler term of an image a bend showed (``bend_image_term_mps``): the
+    #: speed's check reads these
+    speed_sigmas_unbent_mps: list
 
 
 class RecordLookahead:
@@ -1544,11 +1625,14 @@ class RecordLookahead:
         used_s, metres_per_s, fade, noise_s = shape
         meas = self.measurer
         later_s = _K_MERGE * meas.pooled_merge_delay_s
+        # the speed's σ without the Doppler term of an image a bend showed (bend_image): the speed's check
+        # below measures the same wander, and reads the speeds' σ's with no such term
+        bend_v = bend_image_term_mps(fade, meas)
         var = record.sigma_range_m**2 + metres_per_s**2 * max(0.0, later_s**2 - used_s**2)
         base = var
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
                             sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
-        nb = self._window(record, metres_per_s * noise_s)
+        nb = self._window(record, metres_per_s * noise_s, math.sqrt(max(record.sigma_v_r_mps**2 - bend_v**2, 0.0)))
         if nb is not None:
             index = nb.index
             whole = np.array([r.sigma_range_m for r in nb.records])
@@ -1603,12 +1687,20 @@ class RecordLookahead:
             # A merged surface image's Doppler term (image_doppler_sigma_mps) reads the same rate, and is
             # settled with it: a far recording's first frame, the pool still empty, took it from its own rate
             # alone (the depths given: 2.7–6.3 mm/s off with σ 0.6–2.0, 3.2–4.6σ)
+            # Without the depths, the image a bend shows is settled with the bend pooled since (as the range's
+            # σ is, above): the first frames of a recording, the bend not yet standing out, had none
             own_hz, used_hz, image = fade
             settled_hz = max(own_hz, meas.pooled_fade_rate_hz)
-            if settled_hz != used_hz:
-                var_v = (record.sigma_v_r_mps**2 + fade_image_term_mps(settled_hz, image, meas) ** 2
+            later = image
+            if image is None or image.from_bend:
+                found = meas.doppler_image(record.range_m)
+                if found is not None and (image is None or found.wave_doppler_mps > image.wave_doppler_mps):
+                    later = found
+            if settled_hz != used_hz or later is not image:
+                var_v = (record.sigma_v_r_mps**2 + fade_image_term_mps(settled_hz, later, meas) ** 2
                          - fade_image_term_mps(used_hz, image, meas) ** 2)
                 changes["sigma_v_r_mps"] = math.sqrt(max(var_v, 0.0))
+                bend_v = bend_image_term_mps((own_hz, settled_hz, later), meas)
         if nb is not None:
             # the speed against its neighbours' ranges (its own gap, and theirs pooled; not through a range
             # set aside above)
@@ -1616,32 +1708,39 @@ class RecordLookahead:
             # neighbour's (1.5 of a frame's variance at equal spacing), which a merged image's bias moving
             # by ±5 mm from frame to frame would otherwise put on the speeds (corpus, far family)
             noise_r = np.sqrt(np.asarray(nb.noise_m) ** 2 + wander_any / 1.5)
-            gaps, var_g = kinematic_gaps(nb.times_s, nb.ranges_m, nb.speeds_mps, noise_r, nb.sigma_speeds_mps,
+            gaps, var_g = kinematic_gaps(nb.times_s, nb.ranges_m, nb.speeds_mps, noise_r, nb.speed_sigmas_unbent_mps,
                                          frame_s=meas.config.frame_duration_s)
             gaps[near] = np.nan
             extra_v = gap_excess(gaps, var_g, nb.index)
             if extra_v > 0:
+                # the gaps' excess and a bend's image term are two measures of one wander: the larger counts
                 var_v = changes.get("sigma_v_r_mps", record.sigma_v_r_mps) ** 2
-                changes["sigma_v_r_mps"] = math.sqrt(var_v + extra_v)
-        self._measured.append((record, metres_per_s * noise_s))
+                changes["sigma_v_r_mps"] = math.sqrt(var_v + max(0.0, extra_v - bend_v**2))
+        self._measured.append((record, metres_per_s * noise_s,
+                               math.sqrt(max(record.sigma_v_r_mps**2 - bend_image_term_mps(fade, meas) ** 2, 0.0))))
         if changes:
             record = dataclasses.replace(record, **changes)
         self._released.append(record)
         return record
 
-    def _window(self, record: MeasurementRecord, noise_m: float) -> _Neighbours | None:
-        """The record (its range's σ of noise ``noise_m``) and its neighbours as measured, up to
-        ``_KIN_HALF_WINDOW`` on each side; None for a two-way record or fewer than three."""
+    def _window(self, record: MeasurementRecord, noise_m: float, sigma_v_mps: float) -> _Neighbours | None:
+        """The record (its range's σ of noise ``noise_m``, its speed's σ without a bend's image term
+        ``sigma_v_mps``) and its neighbours as measured, up to ``_KIN_HALF_WINDOW`` on each side; None for a
+        two-way record or fewer than three."""
         if record.two_way:
             return None
-        before = [(r, n) for r, n in self._measured if not r.two_way]
-        after = [(held[0], held[1][1] * held[1][3]) for held in list(self._held)[:_KIN_HALF_WINDOW + 1]]
-        window = before + [(record, noise_m)] + [(r, n) for r, n in after if not r.two_way]
+        meas = self.measurer
+        before = [item for item in self._measured if not item[0].two_way]
+        after = [(r, shape[1] * shape[3], math.sqrt(max(r.sigma_v_r_mps**2 - bend_image_term_mps(shape[2], meas) ** 2,
+                                                        0.0)))
+                 for r, shape in list(self._held)[:_KIN_HALF_WINDOW + 1] if not r.two_way]
+        window = before + [(record, noise_m, sigma_v_mps)] + after
         if len(window) < 3:
             return None
-        return _Neighbours([r.t_arrival_s for r, _ in window], [r.range_m for r, _ in window],
-                           [r.v_r_mps for r, _ in window], [n for _, n in window],
-                           [r.sigma_v_r_mps for r, _ in window], [r for r, _ in window], len(before))
+        return _Neighbours([r.t_arrival_s for r, _, _ in window], [r.range_m for r, _, _ in window],
+                           [r.v_r_mps for r, _, _ in window], [n for _, n, _ in window],
+                           [r.sigma_v_r_mps for r, _, _ in window], [r for r, _, _ in window], len(before),
+                           [v for _, _, v in window])
 
 
 def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord], *,
