@@ -1692,7 +1692,7 @@ class RecordLookahead:
             own_hz, used_hz, image = fade
             settled_hz = max(own_hz, meas.pooled_fade_rate_hz)
             later = image
-            if not meas.images_modelled and (image is None or image.from_bend):
+            if (image is None or image.from_bend) and not meas.images_modelled:
                 found = meas.doppler_image(record.range_m)
                 if found is not None and (image is None or found.wave_doppler_mps > image.wave_doppler_mps):
                     later = found
