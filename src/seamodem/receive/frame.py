@@ -417,6 +417,19 @@ def direct_path_kappa(delays_s, amplitudes, first: int, config: FrameConfig, *, 
                                        sound_speed_mps=sound_speed_mps)[first])
 
 
+def amp_rate_mps(rate_hz: float, config: FrameConfig, *, sound_speed_mps: float) -> float:
+    """A log-amplitude rate [Hz] as the phase-rate error of the same scale, a speed at the data carrier
+    [m/s]: c/(2π·f₀)·rate (a fading or beating phasor's log-amplitude and phase are the real and imaginary
+    parts of one analytic function). The fading term (:func:`unmodelled_sigmas`) and a merged image's
+    Doppler term (:func:`image_doppler_sigma_mps`) read it.
+
+    >>> from seamodem import get_preset
+    >>> round(amp_rate_mps(1.0, get_preset("jmse2024"), sound_speed_mps=1500.0) * 1e3, 2)  # [mm/s] per Hz
+    8.53
+    """
+    return sound_speed_mps / (2 * math.pi * config.carrier_hz) * rate_hz
+
+
 def image_doppler_sigma_mps(image: MergedImage, amp_rate_hz: float, config: FrameConfig, *,
                             sound_speed_mps: float) -> float:
     """σ [m/s] the Doppler of a merged surface image puts on the direct path's whole-frame v_r, beyond what
@@ -430,8 +443,7 @@ def image_doppler_sigma_mps(image: MergedImage, amp_rate_hz: float, config: Fram
     scaled by |Re w / Im w|, estimates Re(w)·Δv, up to what the waves can give it
     (``MergedImage.wave_doppler_mps``); what the fading term has already is not added again.
     """
-    to_mps = sound_speed_mps / (2 * math.pi * config.carrier_hz)
-    fade = to_mps * amp_rate_hz
+    fade = amp_rate_mps(amp_rate_hz, config, sound_speed_mps=sound_speed_mps)
     bound = image.re_w * image.wave_doppler_mps
     shown = fade * image.re_w / image.im_w if image.im_w > 0 else math.inf
     sigma = min(bound, shown)
@@ -444,7 +456,7 @@ def fade_image_term_mps(rate_hz: float, image: MergedImage | None, measurer: Fra
     (:func:`image_doppler_sigma_mps`), in quadrature: what ``RecordLookahead`` replaces when it settles
     the rate."""
     c = measurer.settings.sound_speed_mps
-    fade = _K_FADE * c / (2 * math.pi * measurer.config.carrier_hz) * rate_hz
+    fade = _K_FADE * amp_rate_mps(rate_hz, measurer.config, sound_speed_mps=c)
     if image is None:
         return fade
     return math.hypot(fade, image_doppler_sigma_mps(image, rate_hz, measurer.config, sound_speed_mps=c))
@@ -710,10 +722,10 @@ def unmodelled_sigmas(wf: WholeFrameFit, first: int, config: FrameConfig, *, sou
         ``sigma_v``'s share through the time scale it gives the symbol
         instants (``sigma_v / c`` over half the frame) [s].
     """
-    c, f0, dur = sound_speed_mps, config.carrier_hz, config.frame_duration_s
+    c, dur = sound_speed_mps, config.frame_duration_s
     amp = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
     amp = max(amp, pooled_amp_rate_hz)
-    fade = _K_FADE * c / (2 * math.pi * f0) * amp
+    fade = _K_FADE * amp_rate_mps(amp, config, sound_speed_mps=c)
     drift = _K_ACCEL * max(0.0, abs(float(wf.accel_mps2[first])) - PLAUSIBLE_ACCEL_MPS2) * dur / math.sqrt(12)
     # (the segments' timing scatter is already the fit's own σ of the arrival: not counted twice)
     sigma_v = math.hypot(fade, drift)
