@@ -240,6 +240,12 @@ WAVE_AMPLITUDE_M, DEPTH_SIGMA_M = 0.5, 0.1
 WAVE_PERIOD_S = 3.0
 
 
+def wave_doppler_mps(sin_grazing: float, wave_amplitude_m: float, wave_period_s: float) -> float:
+    """RMS Doppler [m/s] the waves give a surface image relative to the direct path: 2·sin θ times the
+    surface's RMS vertical speed, 2π·a/T/√2 (``MergedImage.wave_doppler_mps``)."""
+    return 2 * sin_grazing * (2 * math.pi * wave_amplitude_m / wave_period_s / math.sqrt(2))
+
+
 class MergedImage(NamedTuple):
     """What a surface image merged with the direct path does to it (:func:`merged_image_bias_s`)."""
 
@@ -339,13 +345,13 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     curvature = channel_bend_s2(f_fine, srrc_spectrum(f_fine, period, float(config.rolloff)) ** 2,
                                 1 + z[:, None] * np.exp(-2j * np.pi * f_fine[None, :] * lags[:, None]))
     mean = complex(np.mean(curvature))
-    wave_speed = 2 * math.pi * wave_amplitude_m / wave_period_s / math.sqrt(2)
     z0 = -float(np.mean(SURFACE_REFLECTION)) * cmath.exp(-2j * math.pi * f0 * delta)
     w0 = z0 / (1 + z0)
     return MergedImage(float(np.mean(peaks)), float(np.std(peaks)), mean,
                        float(np.mean(np.abs(curvature - mean) ** 2)),
                        re_w=abs(w0.real), im_w=abs(w0.imag),
-                       wave_doppler_mps=2 * sin_grazing * wave_speed, delay_s=delta)
+                       wave_doppler_mps=wave_doppler_mps(sin_grazing, wave_amplitude_m, wave_period_s),
+                       delay_s=delta)
 
 
 #: a merged surface image's |w(1 − w)| and |Re w| (w = z/(1 + z), z = −ρ·e^{−j2πf₀δ}) over its unknown phase:
@@ -393,9 +399,9 @@ def bend_image(merge_delay_s: float, range_m: float, *, config: FrameConfig, sou
         return None
     delta = min(math.sqrt(3.0 / _BEND_W_1MW) * merge_delay_s, 1.0 / config.bandwidth_hz)
     sin_grazing = min(1.0, math.sqrt(2 * sound_speed_mps * delta / range_m))
-    wave_speed = 2 * math.pi * wave_amplitude_m / wave_period_s / math.sqrt(2)
     return MergedImage(0.0, 0.0, 0j, 0.0, re_w=_BEND_RE_W, im_w=_BEND_RE_W / _BEND_RE_IM,
-                       wave_doppler_mps=2 * sin_grazing * wave_speed, delay_s=delta, from_bend=True)
+                       wave_doppler_mps=wave_doppler_mps(sin_grazing, wave_amplitude_m, wave_period_s),
+                       delay_s=delta, from_bend=True)
 
 
 #: the direct path's κ (``joint_delay_inflation``) beyond which other fitted paths couple to its arrival, and
@@ -470,6 +476,13 @@ def bend_image_term_mps(fade: tuple[float, float, MergedImage | None] | None, me
         return 0.0
     return image_doppler_sigma_mps(fade[2], fade[1], measurer.config,
                                    sound_speed_mps=measurer.settings.sound_speed_mps)
+
+
+def unbent_sigma_v_mps(record: MeasurementRecord, fade: tuple[float, float, MergedImage | None] | None,
+                       measurer: FrameMeasurer) -> float:
+    """The record's v_r σ without the Doppler term of an image a bend showed (:func:`bend_image_term_mps`):
+    what ``RecordLookahead``'s speed check reads [m/s]."""
+    return math.sqrt(max(record.sigma_v_r_mps**2 - bend_image_term_mps(fade, measurer) ** 2, 0.0))
 
 
 def tone_fallback_sigma_mps(sigma_tone: float, sigma_bank: float, gap: float, *, echoes: bool) -> float:
@@ -1404,7 +1417,7 @@ class FrameMeasurer:
             sigma = math.hypot(sigma, sigma_v_un)
             # a merged surface image's Doppler: with the depths, the image's; without them, the one a bend
             # pooled over recent frames shows (this frame's in the pool)
-            doppler_image = image if image is not None else self.doppler_image(range_m)
+            doppler_image = image if self.images_modelled else self.doppler_image(range_m)
             if doppler_image is not None:
                 sigma = math.hypot(sigma, image_doppler_sigma_mps(doppler_image, max(own_rate, pooled_rate),
                                                                   self.config, sound_speed_mps=c))
@@ -1644,7 +1657,8 @@ class RecordLookahead:
         base = var
         var += track_gap_m2(record, list(self._released) + [held[0] for held in list(self._held)[:2]],
                             sigma_range_m=math.sqrt(var), half_frame_s=meas.config.frame_duration_s / 2)
-        nb = self._window(record, metres_per_s * noise_s, math.sqrt(max(record.sigma_v_r_mps**2 - bend_v**2, 0.0)))
+        unbent_v = unbent_sigma_v_mps(record, fade, meas)
+        nb = self._window(record, metres_per_s * noise_s, unbent_v)
         if nb is not None:
             index = nb.index
             whole = np.array([r.sigma_range_m for r in nb.records])
@@ -1728,8 +1742,7 @@ class RecordLookahead:
                 # the gaps' excess and a bend's image term are two measures of one wander: the larger counts
                 var_v = changes.get("sigma_v_r_mps", record.sigma_v_r_mps) ** 2
                 changes["sigma_v_r_mps"] = math.sqrt(var_v + max(0.0, extra_v - bend_v**2))
-        self._measured.append((record, metres_per_s * noise_s,
-                               math.sqrt(max(record.sigma_v_r_mps**2 - bend_image_term_mps(fade, meas) ** 2, 0.0))))
+        self._measured.append((record, metres_per_s * noise_s, unbent_v))
         if changes:
             record = dataclasses.replace(record, **changes)
         self._released.append(record)
@@ -1743,8 +1756,7 @@ class RecordLookahead:
             return None
         meas = self.measurer
         before = [item for item in self._measured if not item[0].two_way]
-        after = [(r, shape[1] * shape[3], math.sqrt(max(r.sigma_v_r_mps**2 - bend_image_term_mps(shape[2], meas) ** 2,
-                                                        0.0)))
+        after = [(r, shape[1] * shape[3], unbent_sigma_v_mps(r, shape[2], meas))
                  for r, shape in list(self._held)[:_KIN_HALF_WINDOW + 1] if not r.two_way]
         window = before + [(record, noise_m, sigma_v_mps)] + after
         if len(window) < 3:
