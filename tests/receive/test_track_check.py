@@ -110,3 +110,21 @@ def test_a_neighbour_that_is_itself_off_does_not_condemn_a_good_frame():
     # nor do neighbours on both sides that disagree in opposite directions
     split = [_record(1.0, 99.5, 1.0), _record(3.0, 96.5, 1.0)]
     assert track_gap_m2(_record(2.0, 98.0, 1.0), split, sigma_range_m=0.001) == 0.0
+
+
+def test_the_last_two_frames_on_an_echo_are_found_by_the_neighbours_that_can_tell():
+    # corpus recording 5198852261 (fading): frames 8 and 9 of 10 took the surface echo, 1.0 m long; frame 8's
+    # own check grew its σ to 0.53 m, and with it, it vetoed frame 9 (σ 48 mm, 20.9σ): it cannot tell a 1 m
+    # gap, nor can frame 6, 3 s away (0.45 m of jerk allowed); frame 7 can, 2 s away, and is now enough
+    from seamodem.receive.frame import track_gap_m2
+
+    track = [_record(float(t), 100.0 - t, 1.0, sigma_r=0.01) for t in range(8)]
+    track.append(_record(8.0, 100.0 - 8 + 1.0, 1.0, sigma_r=0.53))
+    var = track_gap_m2(_record(9.0, 100.0 - 9 + 1.0, 1.0, sigma_r=0.048), track, sigma_range_m=0.048)
+    assert 0.5 < var**0.5 < 1.0, var**0.5  # the gap less frame 7's 3 combined σ
+    # a good last frame whose neighbour before is the one off: frame 7 can tell, and vetoes
+    good = track[:8] + [_record(8.0, 100.0 - 8 + 1.0, 1.0, sigma_r=0.01)]
+    assert track_gap_m2(_record(9.0, 91.0, 1.0, sigma_r=0.01), good, sigma_range_m=0.01) == 0.0
+    # one neighbour that flags and none other that could tell: either may be off, the σ covers the gap
+    alone = [_record(7.0, 93.0 + 1.0, 1.0, sigma_r=0.01), _record(3.0, 97.0, 1.0, sigma_r=0.5)]
+    assert track_gap_m2(_record(9.0, 91.0, 1.0, sigma_r=0.01), alone, sigma_range_m=0.01) > 0.5**2

@@ -1866,8 +1866,14 @@ def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord],
     Returns
     -------
     float
-        0 unless every neighbour within 10 s (at least two) puts the range beyond 3 combined σ on the same
-        side; then the smallest of their gaps² less 9 combined variances.
+        0 unless the neighbours within 10 s that put the range beyond 3 combined σ all do so on the same
+        side, and none of the others could have seen such a gap (3 combined σ below the smallest of
+        theirs) and did not: those others abstain (a neighbour on the same wrong path with its σ already
+        grown by its own check, or one so far that the jerk allowed hides it); then the smallest of the
+        flagging gaps² less 9 combined variances. One flagging neighbour and no other that could tell is
+        enough: which of the two is off is then not known, and the σ covers the gap (a file's last two
+        frames on a fading direct path's echo, 1.0 m long: the last kept σ 48 mm, its neighbour's grown
+        to 0.53 m vetoed it, and the one 3 s away had 0.45 m of jerk allowance).
 
     Examples
     --------
@@ -1896,11 +1902,13 @@ def track_gap_m2(record: MeasurementRecord, neighbours: list[MeasurementRecord],
         if not (math.isfinite(d) and math.isfinite(s2)):
             continue
         gaps.append((d, s2))
-    if len(gaps) < 2 or not all(d * d > 9 * s2 for d, s2 in gaps):
+    flags = [(d, s2) for d, s2 in gaps if d * d > 9 * s2]
+    if not flags or not (all(d > 0 for d, _ in flags) or all(d < 0 for d, _ in flags)):
         return 0.0
-    if not (all(d > 0 for d, _ in gaps) or all(d < 0 for d, _ in gaps)):
-        return 0.0
-    return min(d * d - 9 * s2 for d, s2 in gaps)
+    smallest = min(d * d for d, _ in flags)
+    if any(9 * s2 < smallest for d, s2 in gaps if d * d <= 9 * s2):
+        return 0.0  # a neighbour that could have seen the gap and did not
+    return min(d * d - 9 * s2 for d, s2 in flags)
 
 
 def _mean_weights(times_s: np.ndarray, lo_s: float, hi_s: float, frame_s: float) -> tuple[np.ndarray, float]:
