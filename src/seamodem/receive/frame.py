@@ -1439,7 +1439,7 @@ class FrameMeasurer:
             # (decisions_follow), is no better known: it stands on which decisions the tilt flips
             expected = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
             if (float(fit[0].es_n0[fit[1]]) < _DECISIONS_MIN_ES_N0_SHARE * expected
-                    or not 0.0 <= fit[3] <= _DECISIONS_MAX_FOLLOW):
+                    or not 0.0 <= fit[3]() <= _DECISIONS_MAX_FOLLOW):
                 grown = math.sqrt(sigma**2 + (v - m.pilot.v_mps) ** 2 + sigma_bank**2)
                 inflation = grown / sigma if sigma > 0 else 1.0
                 if math.isfinite(v_tone) and not grown < sigma_tone_gap:
@@ -1530,8 +1530,9 @@ class FrameMeasurer:
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float,
                      image: MergedImage | None = None):
-        """(WholeFrameFit, index of the first path, source, λ) of a decoded frame, or None; λ is how far a fit
-        on decisions follows a tilt of its reference (:func:`decisions_follow`; NaN when decoded). A merged surface
+        """(WholeFrameFit, index of the first path, source, λ) of a decoded frame, or None; λ() is how far a
+        fit on decisions follows a tilt of its reference (:func:`decisions_follow`; NaN when decoded),
+        computed when asked. A merged surface
         image (:meth:`merged_image`) is projected out of the residual's correlation before the paths left
         in it are sought (``fit_whole_frame(clean_lags_s=…)``)."""
         cfg, c = self.config, self.settings.sound_speed_mps
@@ -1563,15 +1564,18 @@ class FrameMeasurer:
             wf, first = fit(data, trusted)
         except ValueError:  # too few trusted symbols
             return None
-        follow = math.nan
-        if soft is not None:
+        def follow() -> float:
+            # asked only of a fit on decisions that the cheaper test (its Es/N0) kept: two more fits
+            if soft is None:
+                return math.nan
+
             def speed(data, trusted) -> float:
                 try:
                     wf, first = fit(data, trusted)
                 except ValueError:
                     return math.nan
                 return float(wf.v_mps[first])
-            follow = decisions_follow(soft, cfg, speed, sound_speed_mps=c)
+            return decisions_follow(soft, cfg, speed, sound_speed_mps=c)
         return wf, first, source, follow
 
 
