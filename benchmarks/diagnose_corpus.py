@@ -35,7 +35,8 @@ def main(argv=None) -> int:
     import seamodem.receive.frame as frame
 
     # the receiver's whole-frame fits, as it makes them (several per frame when a fit on decisions is
-    # redone after a second decoding pass): wrap the name frame.py calls
+    # redone after a second decoding pass, and the two refits of frame.decisions_follow's tilt on a fit on
+    # decisions): wrap the name frame.py calls
     fits: list = []
     fit_whole_frame = frame.fit_whole_frame
 

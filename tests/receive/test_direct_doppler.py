@@ -48,8 +48,9 @@ def test_bank_doppler_is_the_direct_paths(paths):
     assert np.max(np.abs(err)) < 0.008
 
 
-def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_dbhz=30.0, es_n0=1.0):
-    """FrameMeasurer._doppler's choice for a frame whose CRC failed and whose decisions fit is given."""
+def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_dbhz=30.0, es_n0=1.0, follow=0.8):
+    """FrameMeasurer._doppler's choice for a frame whose CRC failed and whose decisions fit is given (``follow``:
+    its λ, how far it follows a tilt of its reference, ``frame.decisions_follow``)."""
     from types import SimpleNamespace
 
     from seamodem.receive.frame import FrameMeasurer
@@ -62,7 +63,7 @@ def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_
                        sigma_delay_s=np.array([1e-6]), n_reference=1000)
     rx = FrameMeasurer(CFG, plan_front_end(CFG, FS, v_max_mps=5.0, sound_speed_mps=1500.0),
                        emissions=Emissions(times_s=[0.0]))
-    rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions")
+    rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions", lambda: follow)
     tone = SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10), spread_hz=0.0, amp_rate_hz=0.0,
                            amp_rate_terms=np.zeros((2, 2)))
     m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=tone,
@@ -103,6 +104,10 @@ def test_a_decisions_fit_that_does_not_explain_the_frame_gets_the_tones_sigma_ru
     # the same fit with a good Es/N0 keeps its own σ (within 3 σ_bank of the bank)
     rec, _ = _decisions_fit_record(1.01, 0.002, 1.0, 1.2, es_n0=1.0)
     assert rec["sigma_v_r_mps"] == 0.002
+    # ... unless it moves further than a tilt of its reference (λ beyond 1.5, or against it): the same rule
+    for follow in (2.0, -0.5, float("nan")):
+        rec, _ = _decisions_fit_record(1.01, 0.002, 1.0, 1.2, es_n0=1.0, follow=follow)
+        assert rec["sigma_v_r_mps"] == pytest.approx(np.sqrt(0.002**2 + 0.01**2 + sigma_bank**2)), follow
     # 0.5 m/s from the bank with the tone on it: the tone's σ is the smaller, the tone is the estimate
     rec, timing = _decisions_fit_record(1.5, 0.002, 1.0, 1.0, es_n0=0.056)
     assert rec["v_r_source"] == "tone" and timing is None

@@ -1100,7 +1100,7 @@ class FrameMeasurer:
             maxlen=_ECHO_POOL_FRAMES)
         # the pilot's arrival against the whole frame's in the last decoded frames: its squared gap less the
         # two σ's (unbiased, not clipped) [s²]: how far this channel moves the pilot's arrival beyond what
-        # its σ holds, for a frame whose range is the pilot's arrival (pooled_pilot_gap_s2)
+        # its σ holds, for a frame whose range is the pilot's arrival (_record)
         self._pilot_gaps: collections.deque[float] = collections.deque(maxlen=_ECHO_POOL_FRAMES)
         self._last_amplitude: tuple[float, float, float] | None = None
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
@@ -1436,7 +1436,8 @@ class FrameMeasurer:
             # its tail's). Its bias is then as unobservable as the tone's among echoes, and its σ is found
             # the same way (tone_fallback_sigma_mps): the one with the smaller σ is used
             # A fit that moves further than a tilt given to its decisions' reference, or against it
-            # (decisions_follow), is no better known: it stands on which decisions the tilt flips
+            # (decisions_follow; NaN, a refit that failed, counts so), is no better known: it stands on
+            # which decisions the tilt flips
             expected = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
             if (float(fit[0].es_n0[fit[1]]) < _DECISIONS_MIN_ES_N0_SHARE * expected
                     or not 0.0 <= fit[3]() <= _DECISIONS_MAX_FOLLOW):
@@ -1564,6 +1565,7 @@ class FrameMeasurer:
             wf, first = fit(data, trusted)
         except ValueError:  # too few trusted symbols
             return None
+
         def follow() -> float:
             # asked only of a fit on decisions that the cheaper test (its Es/N0) kept: two more fits
             if soft is None:
