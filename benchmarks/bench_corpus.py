@@ -37,12 +37,10 @@ PERIOD = 1.0
 SNR_BINS = (-3, 3, 8, 12, 20.01)
 
 
-def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False) -> list[dict]:
-    """One corpus recording through the default receiver: a row per frame sent (missed frames too); with
-    ``depths``, the receiver is given the beacon's and the vehicle's depths (as a vehicle has them: a
-    surveyed beacon, its pressure sensor)."""
+def recording(family: str, seed: int, n_frames: int, echoes: bool = True):
+    """(frame config, scenario, emission times [s], the synthesized recording) of one corpus recording: the
+    jmse2024 beacon every ``PERIOD`` through :func:`corpus.synthesize`."""
     from seamodem import BeaconSchedule, get_preset
-    from seamodem.receive import Emissions, Receiver, ReceiverSettings
     from seamodem.transmit.beacon import render_beacon
 
     cfg = get_preset("jmse2024")
@@ -51,7 +49,17 @@ def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, de
     beacon = render_beacon(cfg, sched)
     t_emit = sched.start_s + PERIOD * np.arange(n_frames)
     band = (cfg.carrier_hz - cfg.bandwidth_hz / 2, cfg.carrier_hz + cfg.bandwidth_hz / 2)
-    rec = synthesize(sc, beacon, t_emit, cfg.sample_rate_hz, cfg.frame_duration_s, band, echoes=echoes)
+    return cfg, sc, t_emit, synthesize(sc, beacon, t_emit, cfg.sample_rate_hz, cfg.frame_duration_s, band,
+                                       echoes=echoes)
+
+
+def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False) -> list[dict]:
+    """One corpus recording through the default receiver: a row per frame sent (missed frames too); with
+    ``depths``, the receiver is given the beacon's and the vehicle's depths (as a vehicle has them: a
+    surveyed beacon, its pressure sensor)."""
+    from seamodem.receive import Emissions, Receiver, ReceiverSettings
+
+    cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes)
     known = dict(beacon_depth_m=float(-sc.beacon[2]), vehicle_depth_m=float(-sc.track["z"])) if depths else {}
     rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True, **known),
                   payloads=rec.payloads)

@@ -15,8 +15,6 @@ import statistics
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
@@ -28,18 +26,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     import bench_corpus
-    from seamodem import BeaconSchedule, get_preset
     from seamodem.receive import Emissions, Receiver, ReceiverSettings
-    from seamodem.transmit.beacon import render_beacon
 
-    cfg = get_preset("jmse2024")
     n = 10
-    sched = BeaconSchedule(count=n, period_s=bench_corpus.PERIOD, start_s=0.2)
-    beacon = render_beacon(cfg, sched)
-    t_emit = sched.start_s + bench_corpus.PERIOD * np.arange(n)
-    band = (cfg.carrier_hz - cfg.bandwidth_hz / 2, cfg.carrier_hz + cfg.bandwidth_hz / 2)
-    rec = bench_corpus.synthesize(bench_corpus.draw_scenario(args.family, args.seed), beacon, t_emit,
-                                  cfg.sample_rate_hz, cfg.frame_duration_s, band, echoes=True)
+    cfg, _, t_emit, rec = bench_corpus.recording(args.family, args.seed, n)
 
     def once() -> tuple[float, int]:
         rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True))
