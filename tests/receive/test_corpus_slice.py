@@ -63,3 +63,16 @@ def test_range_sigma_covers_the_error_off_the_far_family(rows):
     assert np.all(np.isfinite(z))
     assert np.mean(z <= 3) >= 0.9, np.sort(z)[-5:]
     assert np.max(z) <= 6, np.sort(z)[-5:]
+
+
+def test_a_frames_table_pooled_reports_what_its_run_reported(rows, tmp_path):
+    # bench_corpus --pool reads runs' frames tables back: the same rows must give the same report (booleans,
+    # numbers and empty cells as run_recording wrote them), and a table given twice is refused
+    from bench_corpus import _pooled, _report, read_frames, write_frames
+
+    path = tmp_path / "slice_frames.csv"
+    write_frames(rows, path)
+    back = read_frames(path)
+    assert len(back) == len(rows)
+    assert _report(back, "") == _report(rows, "")
+    assert _pooled([path, path], None, "") == 2
