@@ -34,6 +34,13 @@ __all__ = [
 
 #: decoding passes with the echoes cancelled (:func:`decode_through_echoes`) run on a frame whose CRC failed
 ECHO_CANCEL_ITERATIONS = 2
+#: further passes (up to this many in all) while each whole-frame fit explains the frame better than the one
+#: before (:func:`decode_through_echoes`): on ten fading and impulsive corpus recordings whose frames failed,
+#: 81 of 100 frames decoded with 2 passes, 86 with 4 or 6 and 88 with 8 run unconditionally
+ECHO_CANCEL_MAX_ITERATIONS = 8
+#: the gain in explained power (the fitted paths' power over the fit's residual) that earns a pass beyond
+#: :data:`ECHO_CANCEL_ITERATIONS`
+ECHO_CANCEL_PROGRESS = 1.02
 
 
 def fractional_samples(bb: np.ndarray, fs: float, t0_s: float, compensated, config: FrameConfig, sps: int = 2) -> np.ndarray:
@@ -299,6 +306,7 @@ def decode_through_echoes(
     passes: int = 3,
     sent_payload: bytes | None = None,
     iterations: int = 2,
+    max_iterations: int | None = None,
 ) -> FrameDecode:
     """Second decoding pass of a frame whose CRC failed: every echo cancelled at its own Doppler.
 
@@ -312,8 +320,12 @@ def decode_through_echoes(
     drift, equalised and decoded again. Until the CRC passes, this repeats
     from the new decisions, up to ``iterations`` times (the equaliser's output
     SNR is no guide: on fading corpus frames a pass that left it flat took the
-    BER from 0.34 to 0.09, and the next decoded). A lone resolved path is left
-    as it is (nothing to cancel).
+    BER from 0.34 to 0.09, and the next decoded), and then on, up to
+    ``max_iterations``, while each new fit explains the frame better than the
+    one before: its paths' power over its residual up by
+    :data:`ECHO_CANCEL_PROGRESS` (decisions that improve make the fit's
+    reference better; a frame whose decisions are noise stops there). A lone
+    resolved path is left as it is (nothing to cancel).
 
     Parameters
     ----------
@@ -325,6 +337,9 @@ def decode_through_echoes(
         The direct path's arrival [s].
     v_mps : float
         Starting closing speed of every path [m/s] (the first pass's).
+
+    max_iterations : int, optional
+        Most passes in all (default ``iterations``: no passes on progress).
 
     Returns
     -------
@@ -344,7 +359,8 @@ def decode_through_echoes(
     v = v_mps
     if delays.size < 2:
         return first  # a lone resolved path: nothing to cancel
-    for _ in range(iterations):
+    explained = -math.inf
+    for it in range(max(iterations, max_iterations or 0)):
         if dec.info_bits is None:
             break
         data = bits_to_symbols(encode_info(np.asarray(dec.info_bits), config), config.modulation)[: config.n_data]
@@ -355,6 +371,10 @@ def decode_through_echoes(
                                  v_mps=v, sound_speed_mps=c)
         except ValueError:
             break
+        power = float(np.sum(np.abs(wf.amplitudes) ** 2) / wf.noise_var) if wf.noise_var > 0 else math.nan
+        if it >= iterations and not power > ECHO_CANCEL_PROGRESS * explained:
+            break  # beyond the passes always run, only while the fits explain the frame better
+        explained = power
         d = int(np.argmin(np.abs(wf.delays_s - first_s)))
         others = [p for p in range(len(wf.delays_s)) if p != d]
         lo, contrib = echo_contributions(len(bb), fs, t0_s, config=config, symbols=symbols, fit=wf, paths=others,
@@ -426,6 +446,7 @@ def demodulate(
         bb, fs, t0_s, config=config, pilot=pilot, first=dec, delays_s=paths.delays_s, first_s=paths.first_s,
         v_mps=m.compensation_speed_mps, sound_speed_mps=c, settings=settings.equalizer,
         passes=settings.turbo_passes, sent_payload=sent_payload, iterations=ECHO_CANCEL_ITERATIONS,
+        max_iterations=ECHO_CANCEL_MAX_ITERATIONS,
     )
 
 
