@@ -344,9 +344,9 @@ def decode_through_echoes(
         The direct path's arrival [s].
     v_mps : float
         Starting closing speed of every path [m/s] (the first pass's).
-
     max_iterations : int, optional
-        Most passes in all (default ``iterations``: no passes on progress).
+        Most passes in all (default ``iterations``: none on progress). Beyond ``iterations``, a pass is run
+        on progress from the third on: the second fit is the reference.
 
     Returns
     -------
@@ -382,7 +382,7 @@ def decode_through_echoes(
         power = float(np.sum(np.abs(wf.amplitudes) ** 2) / wf.noise_var) if wf.noise_var > 0 else math.nan
         if it == 1:
             explained = power
-        elif it >= iterations and not power >= ECHO_CANCEL_PROGRESS ** (it - 1) * explained:
+        if it >= max(iterations, 2) and not power >= ECHO_CANCEL_PROGRESS ** (it - 1) * explained:
             break  # beyond the passes always run, only while the fits explain the frame better and better
         d = int(np.argmin(np.abs(wf.delays_s - first_s)))
         others = [p for p in range(len(wf.delays_s)) if p != d]
