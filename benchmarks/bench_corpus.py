@@ -260,6 +260,11 @@ def read_frames(path: Path) -> list[dict]:
         return [{k: _csv_value(v) for k, v in row.items()} for row in csv.DictReader(fh)]
 
 
+#: the columns of a frames table the report reads (:func:`_report`)
+_POOLED_COLUMNS = ("family", "seed", "frame", "echoes", "detected", "snr_nominal_db", "v_r_source", "crc_ok",
+                   "v_r_mps", "sigma_v_r_mps", "v_r_true_mps", "range_m", "sigma_range_m", "range_true_m")
+
+
 def _pooled(paths: list[Path], out: Path | None, label: str) -> int:
     """The report over several runs' frames tables: each run's seeds are its own, so the rows are pooled as
     they are (a table read twice would count twice: refused)."""
@@ -270,6 +275,11 @@ def _pooled(paths: list[Path], out: Path | None, label: str) -> int:
             part = read_frames(path)
         except OSError as exc:
             print(f"bench_corpus: cannot read {path}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
+        missing = sorted(set(_POOLED_COLUMNS) - set(part[0])) if part else []
+        if not part or missing:
+            what = f"no column {', '.join(missing)}" if missing else "no rows"
+            print(f"bench_corpus: {path} is not a frames table of bench_corpus ({what})", file=sys.stderr)
             return 2
         for r in part:
             key = (r.get("family"), r.get("seed"), r.get("frame"), r.get("echoes"))

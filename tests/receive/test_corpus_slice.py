@@ -76,3 +76,7 @@ def test_a_frames_table_pooled_reports_what_its_run_reported(rows, tmp_path):
     assert len(back) == len(rows)
     assert _report(back, "") == _report(rows, "")
     assert _pooled([path, path], None, "") == 2
+    # a table that is not one of bench_corpus's is refused, not read into a traceback
+    other = tmp_path / "other.csv"
+    other.write_text("a,b\n1,2\n")
+    assert _pooled([other], None, "") == 2
