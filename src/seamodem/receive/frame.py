@@ -56,6 +56,7 @@ __all__ = [
     "tone_fallback_sigma_mps",
     "bank_echo_sigma_mps",
     "earlier_path_gap_s",
+    "missed_direct_lag_s",
     "merged_image_delay_s",
     "merged_image_bias_s",
     "two_carrier_sigma_mps",
@@ -179,6 +180,36 @@ def direct_path_share(m: FrameMeasurement) -> float:
         return 1.0
     first = int(np.argmin(np.abs(np.asarray(paths.delays_s) - paths.first_s)))
     return float(max(power[first] / power.sum(), 1e-3))
+
+
+#: a component of a decoded frame's residual before the direct path (``WholeFrameFit.earlier_path``) is a direct
+#: path the pilot's fit missed when its |amplitude|² stands this many times its noise expectation out ...
+MISSED_DIRECT_Z2 = 30.0
+#: ... and its amplitude is at least this share of the path taken as the direct one
+MISSED_DIRECT_GAIN = 0.2
+
+
+def missed_direct_lag_s(wf: WholeFrameFit, first: int, config: FrameConfig) -> float | None:
+    """How far before the path taken as the direct one [s] (< 0) a decoded frame's residual holds another
+    path, None when it holds none (``WholeFrameFit.earlier_path``, sought from 3/B to a pilot's length before).
+
+    Nothing arrives before the direct path, so a component there that stands :data:`MISSED_DIRECT_Z2`
+    times its noise expectation out (per lag e^{−30}: the window's few thousand lags leave it about 1e−10
+    of frames in Gaussian noise) and is at least :data:`MISSED_DIRECT_GAIN` of the path taken is the
+    direct path itself, which the pilot's 23 ms did not show above its threshold. The corpus's far family
+    at 4 dB (a surface image −0.92 at 33 µs, near its null): the pilot's fit took the bottom echo, 0.62 m
+    late with σ 69 mm (9σ); the whole frame's residual held the direct pair 740–894 times its noise,
+    0.85 of the path taken. Decoded frames' residuals elsewhere held nothing beyond 26 times it
+    (:func:`~seamodem.receive.wholeframe.earlier_path`, 3/B and more before the direct path).
+    """
+    found = wf.earlier_path
+    if found is None:
+        return None
+    lag, amp, z2 = found
+    a0 = abs(complex(wf.amplitudes[first]))
+    if not (math.isfinite(lag) and lag < 0 and z2 >= MISSED_DIRECT_Z2 and abs(amp) >= MISSED_DIRECT_GAIN * a0):
+        return None
+    return float(lag)
 
 
 def earlier_path_gap_s(m: FrameMeasurement) -> float:
@@ -1232,7 +1263,7 @@ class FrameMeasurer:
         sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_pilot_pull"))
         if doppler["v_r_source"] == "whole_frame":
             if timing is not None:
-                self._pilot_gaps.append((timing[0] - t_arr) ** 2 - timing[1] ** 2 - sigma_tau**2)
+                self._pilot_gaps.append((timing[0] + timing[4] - t_arr) ** 2 - timing[1] ** 2 - sigma_tau**2)
         elif self._pilot_gaps:
             # the pilot's arrival is the range: the last decoded frames' gaps between their pilot's arrival and
             # their whole frame's, beyond both σ's, are this channel's (an impulsive recording's surface echo
@@ -1248,7 +1279,9 @@ class FrameMeasurer:
         sigma_tau = math.hypot(sigma_tau, unmodelled)
         shape_used = unmodelled  # without a fit: the pooled bend, or a set-aside fit's terms (the larger)
         kappa = 1.0  # the whole-frame fit's direct path's κ (joint_delay_inflation), when it has one
-        sigma_first = earlier_path_gap_s(m)
+        # (a direct path the pilot's fit missed, which the whole frame found: ``lead`` before the pilot's)
+        lead = 0.0 if timing is None else timing[4]
+        sigma_first = max(0.0, earlier_path_gap_s(m) - lead)
         # the direct path's data-aided arrival over the frame, when decoded. Not on decisions: they were taken
         # at the pilot's timing, and pull the fit's arrival towards it (22 single-path frames at −3…−1 dB,
         # the corpus: the two arrivals' errors correlated 0.60, the fit's 0.64 of the pilot's plus its own,
@@ -1263,9 +1296,10 @@ class FrameMeasurer:
             # bound off) the gap less its expectation: beyond 3σ only left those frames 3–5σ off
             # the channel's shape (a merged echo) biases both arrivals alike: it is not in their gap, and goes
             # to the σ of the one used (in the gap's expectation on decisions, a fit 39 mm off kept σ 2.8 mm)
-            t_fit, sigma_fit, sigma_shape, kappa = timing
+            # (the pilot's arrival is compared with the whole frame's of the same path: ``lead`` after the direct)
+            t_fit, sigma_fit, sigma_shape, kappa, _ = timing
             gap_k = 9 if doppler["v_r_source"] == "whole_frame" else 1
-            excess = (t_fit - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
+            excess = (t_fit + lead - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
             if doppler["v_r_source"] == "whole_frame":
                 t_arr, sigma_tau = t_fit, sigma_fit
                 noise_tau = sigma_fit
@@ -1362,11 +1396,13 @@ class FrameMeasurer:
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
                  excess: float, snr_direct_db: float, range_m: float = math.nan
-                 ) -> tuple[dict, tuple[float, float, float, float] | None]:
+                 ) -> tuple[dict, tuple[float, float, float, float, float] | None]:
         """v_r_mps, its σ and source (and the bank's σ, ``sigma_bank``): the direct path's whole-frame Doppler
         when decoded, else the tone ML; and (arrival [s], its σ [s], the channel shape's σ [s], which the
-        pilot's arrival shares: ``channel_shape_delay_s``; the direct path's κ with the ends' depths, else 1)
-        of the direct path from the whole-frame fit, or None. ``range_m`` (nan when unknown) takes the
+        pilot's arrival shares: ``channel_shape_delay_s``; the direct path's κ with the ends' depths, else 1;
+        how far after it the path the pilot's arrival took lies [s], 0 unless the whole frame found a direct
+        path the pilot's fit missed: :func:`missed_direct_lag_s`) of the direct path from the whole-frame fit,
+        or None. ``range_m`` (nan when unknown) takes the
         spreading out of the frames' amplitude change, and gives a merged surface image with the depths
         (:meth:`merged_image`): the channel bend it explains is not counted.
 
@@ -1452,7 +1488,7 @@ class FrameMeasurer:
         # arrival through the pilot's sidelobes (pilot_sidelobe_sigma_s)
         shown = fit if fit is not None else (rejected[2] if rejected is not None else None)
         pilot_pull = 0.0 if shown is None else pilot_sidelobe_sigma_s(
-            shown[0], shown[1], m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
+            shown[0], shown[4], m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
         pilot_excess = 1.0 if shown is None else float(shown[0].pilot_noise_excess)
         if (fit is None or fit[2] != "whole_frame") and self._decoded_echoes:
             # the pilot's arrival is the range: the echoes of the last decoded frames pull it too (the median
@@ -1470,7 +1506,7 @@ class FrameMeasurer:
             gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
             sigma_tone_gap = math.sqrt(sigma_tone_gap**2 + max(0.0, gap_fit2))
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
-            wf, first, source, _ = fit
+            wf, first, source, _, pilot_path = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
             # decoded frames feed the pool (wrong decisions move a fit's amplitudes), fits on decisions use it:
             # a frame whose amplitude stayed flat had the fit's noise alone as σ while its phase wandered (the
@@ -1516,7 +1552,7 @@ class FrameMeasurer:
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate), doppler_image)), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape,
                  direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
-                 if self.images_modelled else 1.0)
+                 if self.images_modelled else 1.0, float(wf.delays_s[pilot_path] - wf.delays_s[first]))
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
@@ -1531,9 +1567,11 @@ class FrameMeasurer:
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float,
                      image: MergedImage | None = None):
-        """(WholeFrameFit, index of the first path, source, λ) of a decoded frame, or None; λ() is how far a
-        fit on decisions follows a tilt of its reference (:func:`decisions_follow`; NaN when decoded),
-        computed when asked. A merged surface
+        """(WholeFrameFit, index of the first path, source, λ, index of the path the pilot's arrival took) of a
+        decoded frame, or None; λ() is how far a fit on decisions follows a tilt of its reference
+        (:func:`decisions_follow`; NaN when decoded), computed when asked. When the residual of a decoded
+        frame's fit holds a path before the direct one (:func:`missed_direct_lag_s`), the frame is fitted
+        again with it, and it is the direct path when that fit explains the frame better. A merged surface
         image (:meth:`merged_image`) is projected out of the residual's correlation before the paths left
         in it are sought (``fit_whole_frame(clean_lags_s=…)``)."""
         cfg, c = self.config, self.settings.sound_speed_mps
@@ -1551,20 +1589,36 @@ class FrameMeasurer:
         paths = m.echoes if m.echoes is not None else find_echoes(bb, fs, t0_s, config=cfg, pilot=self.pilot,
                                                                   paths=m.paths, eps=eps)
 
-        def fit(data, trusted) -> tuple[WholeFrameFit, int]:
+        def fit(data, trusted, delays=paths.delays_s, direct=paths.first_s,
+                reach=0.0) -> tuple[WholeFrameFit, int]:
             wf = fit_whole_frame(bb, fs, t0_s, config=cfg, symbols=np.concatenate([self.pilot, data]),
                                  reference=np.concatenate([np.ones(cfg.n_pilot, bool), trusted]),
-                                 delays_s=paths.delays_s, v_mps=m.compensation_speed_mps,
-                                 sound_speed_mps=c, direct_s=paths.first_s,
+                                 delays_s=delays, v_mps=m.compensation_speed_mps,
+                                 sound_speed_mps=c, direct_s=direct,
                                  split=2 if self.images_modelled else 0,
                                  clean=self.images_modelled,
-                                 clean_lags_s=() if image is None else (-image.bias_s, image.delay_s - image.bias_s))
-            return wf, int(np.argmin(np.abs(wf.delays_s - paths.first_s)))
+                                 clean_lags_s=() if image is None else (-image.bias_s, image.delay_s - image.bias_s),
+                                 earlier_reach_s=reach)
+            return wf, int(np.argmin(np.abs(wf.delays_s - direct)))
 
         try:
-            wf, first = fit(data, trusted)
+            # a decoded frame's residual is searched for a direct path the pilot's fit missed
+            wf, first = fit(data, trusted, reach=cfg.n_pilot * cfg.symbol_period_s if dec.crc_ok else 0.0)
         except ValueError:  # too few trusted symbols
             return None
+        pilot_path = first
+        lag = missed_direct_lag_s(wf, first, cfg)
+        if lag is not None:
+            t_direct = float(wf.delays_s[first]) + lag
+            try:
+                wf2, first2 = fit(data, trusted, np.concatenate([[t_direct], paths.delays_s]), t_direct)
+            except ValueError:
+                wf2 = None
+            if wf2 is not None:
+                taken = int(np.argmin(np.abs(wf2.delays_s - paths.first_s)))
+                if (first2 != taken and wf2.noise_var < wf.noise_var
+                        and float(wf2.delays_s[taken] - wf2.delays_s[first2]) * cfg.bandwidth_hz >= 1.0):
+                    wf, first, pilot_path = wf2, first2, taken
 
         def follow() -> float:
             # asked only of a fit on decisions that the cheaper test (its Es/N0) kept: two more fits
@@ -1578,7 +1632,7 @@ class FrameMeasurer:
                     return math.nan
                 return float(wf.v_mps[first])
             return decisions_follow(soft, cfg, speed, sound_speed_mps=c)
-        return wf, first, source, follow
+        return wf, first, source, follow, pilot_path
 
 
 #: the radial jerk the track check allows [m/s³] (``RecordLookahead``): circling at 8 m radius and
