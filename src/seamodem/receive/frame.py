@@ -199,7 +199,8 @@ def missed_direct_lag_s(wf: WholeFrameFit, first: int, config: FrameConfig) -> f
     direct path itself, which the pilot's 23 ms did not show above its threshold. The corpus's far family
     at 4 dB (a surface image −0.92 at 33 µs, near its null): the pilot's fit took the bottom echo, 0.62 m
     late with σ 69 mm (9σ); the whole frame's residual held the direct pair 740–894 times its noise,
-    0.85 of the path taken. Decoded frames' residuals elsewhere held nothing beyond 26 times it
+    0.85 of the path taken. The 235 decoded frames of 24 other fresh corpus recordings (every family) held
+    at most 22 times it there, median 8, and 0.06 of the direct path
     (:func:`~seamodem.receive.wholeframe.earlier_path`, 3/B and more before the direct path).
     """
     found = wf.earlier_path
