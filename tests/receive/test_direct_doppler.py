@@ -63,7 +63,7 @@ def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_
                        sigma_delay_s=np.array([1e-6]), n_reference=1000)
     rx = FrameMeasurer(CFG, plan_front_end(CFG, FS, v_max_mps=5.0, sound_speed_mps=1500.0),
                        emissions=Emissions(times_s=[0.0]))
-    rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions", lambda: follow, 0)
+    rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions", lambda: follow, 0, None)
     tone = SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10), spread_hz=0.0, amp_rate_hz=0.0,
                            amp_rate_terms=np.zeros((2, 2)))
     m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=tone,

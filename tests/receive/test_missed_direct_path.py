@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from seamodem import build_frame, get_preset
-from seamodem.receive.frame import MISSED_DIRECT_Z2, missed_direct_lag_s
+from seamodem.receive.frame import MISSED_DIRECT_Z2, earlier_fitted_direct, missed_direct_lag_s
 from seamodem.receive.frontend import FrontEnd, plan_front_end
 from seamodem.receive.wholeframe import earlier_path, fit_whole_frame
 
@@ -115,3 +115,40 @@ def test_the_corpus_frame_whose_pilot_took_the_bottom_echo_ranges_the_direct_pat
     assert all(r["crc_ok"] for r in rows)
     assert abs(err[3]) < 0.2, err
     assert np.all(np.abs(err) <= 3 * sigma), err / sigma
+
+
+def test_a_weaker_path_before_the_one_taken_is_the_direct_path_when_the_whole_frame_shows_it():
+    # the pilot's fit found the weak direct path but took the stronger echo (the earliest at least 0.3 of the
+    # strongest); fitted over the decoded frame, the weak one stands far out of its noise
+    bb, ta = _frame(4, direct_gain=0.25)
+    fit = _fit(bb, [ta, ta + LATE_S], ta + LATE_S)
+    first = int(np.argmin(np.abs(fit.delays_s - (ta + LATE_S))))
+    q = earlier_fitted_direct(fit, first, CFG)
+    assert q is not None and abs(fit.delays_s[q] - ta) < 4 * fit.sigma_delay_s[q] + 1e-6
+    assert fit.n_reference * fit.es_n0[q] > 100
+
+
+def test_a_path_the_pilot_saw_in_noise_before_the_direct_one_is_not_taken():
+    # a "path" 8.3 ms before a lone one (what the pilot's fit of the corpus's far recording 6920412038 had at
+    # 0.18 of the strongest): over the whole frame it is noise
+    for seed in range(5):
+        bb, ta = _frame(200 + seed, direct_gain=0.0, snr_db=[0.0, 10.0, 20.0][seed % 3])
+        fit = _fit(bb, [ta + LATE_S - 8.3e-3, ta + LATE_S], ta + LATE_S)
+        assert earlier_fitted_direct(fit, 1, CFG) is None
+        assert fit.n_reference * fit.es_n0[0] < MISSED_DIRECT_Z2 / 2
+
+
+def test_the_corpus_frame_whose_range_sigma_covered_a_noise_path_before_the_direct_one():
+    # the corpus's far recording 6920412038, 14 dB: frame 9's pilot fit had a path 8.3 ms early, 0.18 of the
+    # strongest, and the arrival's σ covered the gap: 12.4 m for an error of 7.9 mm before
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from bench_corpus import run_recording
+
+    rows = run_recording("far", 6920412038, 10)
+    last = rows[9]
+    assert last["crc_ok"] and last["v_r_source"] == "whole_frame"
+    assert last["sigma_range_m"] < 0.2
+    assert abs(last["range_m"] - last["range_true_m"]) <= 3 * last["sigma_range_m"]

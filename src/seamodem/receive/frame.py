@@ -41,8 +41,8 @@ from .multipath import find_echoes, sidelobe_pull_s
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .two_way import two_way_range_m
-from .wholeframe import (WholeFrameFit, channel_bend_s2, fit_whole_frame, joint_delay_inflation, joint_delay_sigma_s,
-                         srrc_spectrum)
+from .wholeframe import (EARLIER_NEAREST_B, WholeFrameFit, channel_bend_s2, fit_whole_frame, joint_delay_inflation,
+                         joint_delay_sigma_s, srrc_spectrum)
 
 __all__ = [
     "BasebandBuffers",
@@ -57,6 +57,7 @@ __all__ = [
     "bank_echo_sigma_mps",
     "earlier_path_gap_s",
     "missed_direct_lag_s",
+    "earlier_fitted_direct",
     "merged_image_delay_s",
     "merged_image_bias_s",
     "two_carrier_sigma_mps",
@@ -211,6 +212,30 @@ def missed_direct_lag_s(wf: WholeFrameFit, first: int, config: FrameConfig) -> f
     if not (math.isfinite(lag) and lag < 0 and z2 >= MISSED_DIRECT_Z2 and abs(amp) >= MISSED_DIRECT_GAIN * a0):
         return None
     return float(lag)
+
+
+def earlier_fitted_direct(wf: WholeFrameFit, first: int, config: FrameConfig) -> int | None:
+    """The earliest path of a decoded frame's whole-frame fit at least 3/B (``EARLIER_NEAREST_B``) before the
+    path taken as the direct one (``first``) that stands out over the whole frame (n·Es/N0, its |amplitude|²
+    over its noise expectation, at least :data:`MISSED_DIRECT_Z2`, and :data:`MISSED_DIRECT_GAIN` of the path
+    taken); None when there is none.
+
+    The pilot's fit takes the earliest path at least 0.3 of the strongest; a weaker one before it is a faded
+    direct path or noise, which the pilot alone cannot tell (:func:`earlier_path_gap_s`: the arrival's σ
+    covers the gap). The whole frame can: the corpus's far recording 6920412038, 14 dB, frame 9: the pilot's
+    fit had a path 8.3 ms early at 0.18 of the strongest, whose σ made the range's 12.4 m (error 7.9 mm);
+    fitted over the decoded frame it stood 2 times its noise expectation, 0.007 of the direct path.
+    """
+    a0 = abs(complex(wf.amplitudes[first]))
+    if not a0 > 0:
+        return None
+    for p in np.argsort(wf.delays_s):
+        if (wf.delays_s[first] - wf.delays_s[p]) * config.bandwidth_hz < EARLIER_NEAREST_B:
+            break  # nearer, a merged echo's misfit stands out too (earlier_path)
+        if (wf.n_reference * float(wf.es_n0[p]) >= MISSED_DIRECT_Z2
+                and abs(complex(wf.amplitudes[p])) >= MISSED_DIRECT_GAIN * a0):
+            return int(p)
+    return None
 
 
 def earlier_path_gap_s(m: FrameMeasurement) -> float:
@@ -1281,8 +1306,10 @@ class FrameMeasurer:
         shape_used = unmodelled  # without a fit: the pooled bend, or a set-aside fit's terms (the larger)
         kappa = 1.0  # the whole-frame fit's direct path's κ (joint_delay_inflation), when it has one
         # (a direct path the pilot's fit missed, which the whole frame found: ``lead`` before the pilot's)
+        # (of the pilot's earlier paths, those the decoded frame's whole-frame fit judged are not in the gap)
         lead = 0.0 if timing is None else timing[4]
-        sigma_first = max(0.0, earlier_path_gap_s(m) - lead)
+        gap_first = timing[5] if timing is not None and timing[5] is not None else earlier_path_gap_s(m)
+        sigma_first = max(0.0, gap_first - lead)
         # the direct path's data-aided arrival over the frame, when decoded. Not on decisions: they were taken
         # at the pilot's timing, and pull the fit's arrival towards it (22 single-path frames at −3…−1 dB,
         # the corpus: the two arrivals' errors correlated 0.60, the fit's 0.64 of the pilot's plus its own,
@@ -1298,7 +1325,7 @@ class FrameMeasurer:
             # the channel's shape (a merged echo) biases both arrivals alike: it is not in their gap, and goes
             # to the σ of the one used (in the gap's expectation on decisions, a fit 39 mm off kept σ 2.8 mm)
             # (the pilot's arrival is compared with the whole frame's of the same path: ``lead`` after the direct)
-            t_fit, sigma_fit, sigma_shape, kappa, _ = timing
+            t_fit, sigma_fit, sigma_shape, kappa, _, _ = timing
             gap_k = 9 if doppler["v_r_source"] == "whole_frame" else 1
             excess = (t_fit + lead - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
             if doppler["v_r_source"] == "whole_frame":
@@ -1397,15 +1424,17 @@ class FrameMeasurer:
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
                  excess: float, snr_direct_db: float, range_m: float = math.nan
-                 ) -> tuple[dict, tuple[float, float, float, float, float] | None]:
+                 ) -> tuple[dict, tuple[float, float, float, float, float, float | None] | None]:
         """v_r_mps, its σ and source (and the bank's σ, ``sigma_bank``): the direct path's whole-frame Doppler
         when decoded, else the tone ML; and (arrival [s], its σ [s], the channel shape's σ [s], which the
         pilot's arrival shares: ``channel_shape_delay_s``; the direct path's κ with the ends' depths, else 1;
         how far after it the path the pilot's arrival took lies [s], 0 unless the whole frame found a direct
-        path the pilot's fit missed: :func:`missed_direct_lag_s`) of the direct path from the whole-frame fit,
-        or None. ``range_m`` (nan when unknown) takes the
-        spreading out of the frames' amplitude change, and gives a merged surface image with the depths
-        (:meth:`merged_image`): the channel bend it explains is not counted.
+        path the pilot's fit missed or took as an echo's precursor: :func:`missed_direct_lag_s`,
+        :func:`earlier_fitted_direct`; the gap [s] to the pilot's fit's earliest path within 3/B before the one
+        it took when the decoded frame's fit judged those further, else None) of the direct path from the
+        whole-frame fit, or None. ``range_m`` (nan when unknown) takes the spreading out of the frames'
+        amplitude change, and gives a merged surface image with the depths (:meth:`merged_image`): the
+        channel bend it explains is not counted.
 
         The tone sums every path; it is flagged as multipath-biased when it and
         the direct path's own estimate (whole-frame fit, else the pilot bank)
@@ -1507,7 +1536,7 @@ class FrameMeasurer:
             gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
             sigma_tone_gap = math.sqrt(sigma_tone_gap**2 + max(0.0, gap_fit2))
         if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
-            wf, first, source, _, pilot_path = fit
+            wf, first, source, _, pilot_path, near_gap = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
             # decoded frames feed the pool (wrong decisions move a fit's amplitudes), fits on decisions use it:
             # a frame whose amplitude stayed flat had the fit's noise alone as σ while its phase wandered (the
@@ -1553,7 +1582,7 @@ class FrameMeasurer:
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate), doppler_image)), \
                 (float(wf.delays_s[first]), sigma_tau_fit, shape,
                  direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
-                 if self.images_modelled else 1.0, float(wf.delays_s[pilot_path] - wf.delays_s[first]))
+                 if self.images_modelled else 1.0, float(wf.delays_s[pilot_path] - wf.delays_s[first]), near_gap)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
@@ -1568,12 +1597,15 @@ class FrameMeasurer:
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float,
                      image: MergedImage | None = None):
-        """(WholeFrameFit, index of the first path, source, λ, index of the path the pilot's arrival took) of a
-        decoded frame, or None; λ() is how far a fit on decisions follows a tilt of its reference
-        (:func:`decisions_follow`; NaN when decoded), computed when asked. When the residual of a decoded
-        frame's fit holds a path before the direct one (:func:`missed_direct_lag_s`), the frame is fitted
-        again with it, and it is the direct path when that fit explains the frame better. A merged surface
-        image (:meth:`merged_image`) is projected out of the residual's correlation before the paths left
+        """(WholeFrameFit, index of the first path, source, λ, index of the path the pilot's arrival took, the
+        gap [s] to the pilot's fit's earliest path within 3/B before that one when the frame decoded and the
+        fit judged the earlier ones, else None) of a decoded
+        frame, or None; λ() is how far a fit on decisions follows a tilt of its reference
+        (:func:`decisions_follow`; NaN when decoded), computed when asked. On a decoded frame, a path of the
+        fit before the pilot's that stands out over the whole frame (:func:`earlier_fitted_direct`) is the
+        direct path; else, when the fit's residual holds one there (:func:`missed_direct_lag_s`), the frame is
+        fitted again with it, and it is the direct path when that fit explains the frame better. A merged
+        surface image (:meth:`merged_image`) is projected out of the residual's correlation before the paths left
         in it are sought (``fit_whole_frame(clean_lags_s=…)``)."""
         cfg, c = self.config, self.settings.sound_speed_mps
         soft = None
@@ -1608,18 +1640,44 @@ class FrameMeasurer:
         except ValueError:  # too few trusted symbols
             return None
         pilot_path = first
-        lag = missed_direct_lag_s(wf, first, cfg)
-        if lag is not None:
-            t_direct = float(wf.delays_s[first]) + lag
+
+        def retake(wf2: WholeFrameFit, first2: int) -> None:
+            # the earlier path as the direct one, where the fit kept it at least 1/B before the pilot's
+            nonlocal wf, first, pilot_path
+            taken = int(np.argmin(np.abs(wf2.delays_s - paths.first_s)))
+            if first2 != taken and float(wf2.delays_s[taken] - wf2.delays_s[first2]) * cfg.bandwidth_hz >= 1.0:
+                wf, first, pilot_path = wf2, first2, taken
+
+        if dec.crc_ok:
+            q = earlier_fitted_direct(wf, first, cfg)
+            lag = missed_direct_lag_s(wf, first, cfg) if q is None else None
             try:
-                wf2, first2 = fit(data, trusted, np.concatenate([[t_direct], paths.delays_s]), t_direct)
+                if q is not None:
+                    # a path the pilot's fit found before the one it took, which the whole frame shows: the direct
+                    # path (fitted again with its channel's shape read)
+                    retake(*fit(data, trusted, paths.delays_s, float(wf.delays_s[q]),
+                                reach=cfg.n_pilot * cfg.symbol_period_s))
+                elif lag is not None:
+                    t_direct = float(wf.delays_s[first]) + lag
+                    wf2, first2 = fit(data, trusted, np.concatenate([[t_direct], paths.delays_s]), t_direct)
+                    if wf2.noise_var < wf.noise_var:
+                        retake(wf2, first2)
             except ValueError:
-                wf2 = None
-            if wf2 is not None:
-                taken = int(np.argmin(np.abs(wf2.delays_s - paths.first_s)))
-                if (first2 != taken and wf2.noise_var < wf.noise_var
-                        and float(wf2.delays_s[taken] - wf2.delays_s[first2]) * cfg.bandwidth_hz >= 1.0):
-                    wf, first, pilot_path = wf2, first2, taken
+                pass
+        # the pilot's fit's paths 3/B or more before the one it took were all fitted over the decoded frame: one
+        # that stands out was taken above, the others are noise; of its gap (earlier_path_gap_s) only that to the
+        # paths within 3/B is left, where a merged echo's misfit and the direct path's delay trade (the corpus's
+        # far recording 6920412519: paths 1–2/B before its merged pair pulled the fitted arrival 23–50 µs
+        # early). A path there that stands out but is too weak to be taken leaves the whole gap (None)
+        pilot_paths = m.echoes if m.echoes is not None else m.paths
+        near_gap = None
+        if (dec.crc_ok and len(pilot_paths.delays_s)
+                and np.min(paths.delays_s) <= np.min(pilot_paths.delays_s) + 1e-9
+                and not np.any(((wf.delays_s[first] - wf.delays_s) * cfg.bandwidth_hz >= EARLIER_NEAREST_B)
+                               & (wf.n_reference * wf.es_n0 >= MISSED_DIRECT_Z2))):
+            ahead = pilot_paths.first_s - np.asarray(pilot_paths.delays_s, float)
+            near = ahead[(ahead > 0) & (ahead * cfg.bandwidth_hz < EARLIER_NEAREST_B)]
+            near_gap = float(np.max(near)) if near.size else 0.0
 
         def follow() -> float:
             # asked only of a fit on decisions that the cheaper test (its Es/N0) kept: two more fits
@@ -1633,7 +1691,7 @@ class FrameMeasurer:
                     return math.nan
                 return float(wf.v_mps[first])
             return decisions_follow(soft, cfg, speed, sound_speed_mps=c)
-        return wf, first, source, follow, pilot_path
+        return wf, first, source, follow, pilot_path, near_gap
 
 
 #: the radial jerk the track check allows [m/s³] (``RecordLookahead``): circling at 8 m radius and

@@ -347,7 +347,7 @@ _N_BANDS = 4
 #: times their noise, a 23 mm bound on ranges within 1 mm (the corpus's far family, the depths given)
 _MISSED_AFTER_B = 1.5
 #: a component before the direct path is sought from this many 1/B before it on (:func:`earlier_path`)
-_EARLIER_NEAREST_B = 3.0
+EARLIER_NEAREST_B = 3.0
 #: echoes at least this share of the strongest path's amplitude get their own channel's curvature
 _BEND_MIN_FRACTION = 0.2
 #: an echo whose bend |c|²/noise exceeds this is split (noise alone: exponential, beyond 9 in 1.2e-4 of fits)
@@ -654,7 +654,7 @@ def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config:
 
 
 def earlier_path(resid: np.ndarray, template: np.ndarray, fs: float, config: FrameConfig, *,
-                 reach_s: float, nearest_b: float = _EARLIER_NEAREST_B) -> tuple[float, complex, float] | None:
+                 reach_s: float, nearest_b: float = EARLIER_NEAREST_B) -> tuple[float, complex, float] | None:
     """The strongest component of a fit's residual that arrives before the direct path: (its lag after the
     direct path [s], < 0; its amplitude at the direct path's scale; |amplitude|² over its noise expectation),
     None when the search window is empty or the template has no energy.
