@@ -666,9 +666,9 @@ def earlier_path(resid: np.ndarray, template: np.ndarray, fs: float, config: Fra
     lag). Nearer than a few 1/B the misfit of a merged echo fitted with the direct path (its pulse's
     derivative) and its sidelobes peak (decoded corpus frames: up to 98 times the noise at 2–3/B, 0.02–0.05
     of the direct path); beyond, the 235 decoded frames of 24 corpus recordings held at most 22 times it,
-    median 8 (fits on wrong decisions more: their residual is the frame). A frame whose direct path faded below the pilot fit's
-    threshold (a surface image near its null) shows it here: 740–894 times its noise, 0.85 of the path
-    taken, 0.42 ms before it (``FrameMeasurer._whole_frame``).
+    median 8 (fits on wrong decisions more: their residual is the frame). A frame whose direct path faded
+    below the pilot fit's threshold (a surface image near its null) shows it here: 740–894 times its
+    noise, 0.85 of the path taken, 0.42 ms before it (``FrameMeasurer._whole_frame``).
     """
     import scipy.fft
 
