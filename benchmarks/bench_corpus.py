@@ -2,7 +2,8 @@
 
 Run: ``python benchmarks/bench_corpus.py`` (the report: fixed seed 2025, 25
 recordings of 10 frames per family, 1000 frames) or ``--fresh`` (a new seed,
-printed, for the check), ``--recordings N --frames M``, ``--jobs J``;
+printed, for the check), ``--recordings N --frames M``, ``--jobs J``,
+``--preset NAME`` (another frame than jmse2024, on which the receiver's constants were measured);
 ``--pool A_frames.csv B_frames.csv …`` runs nothing and reports over earlier
 runs' frames tables together (fresh seeds of one revision: a cell of 20 rows
 fails 97 % on one miss, 100–300 rows judge it).
@@ -40,13 +41,13 @@ PERIOD = 1.0
 SNR_BINS = (-3, 3, 8, 12, 20.01)
 
 
-def recording(family: str, seed: int, n_frames: int, echoes: bool = True):
+def recording(family: str, seed: int, n_frames: int, echoes: bool = True, preset: str = "jmse2024"):
     """(frame config, scenario, emission times [s], the synthesized recording) of one corpus recording: the
-    jmse2024 beacon every ``PERIOD`` through :func:`corpus.synthesize`."""
+    beacon of ``preset`` (default jmse2024) every ``PERIOD`` through :func:`corpus.synthesize`."""
     from seamodem import BeaconSchedule, get_preset
     from seamodem.transmit.beacon import render_beacon
 
-    cfg = get_preset("jmse2024")
+    cfg = get_preset(preset)
     sc = draw_scenario(family, seed)
     sched = BeaconSchedule(count=n_frames, period_s=PERIOD, start_s=0.2)
     beacon = render_beacon(cfg, sched)
@@ -56,13 +57,14 @@ def recording(family: str, seed: int, n_frames: int, echoes: bool = True):
                                        echoes=echoes)
 
 
-def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False) -> list[dict]:
+def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False,
+                  preset: str = "jmse2024") -> list[dict]:
     """One corpus recording through the default receiver: a row per frame sent (missed frames too); with
     ``depths``, the receiver is given the beacon's and the vehicle's depths (as a vehicle has them: a
-    surveyed beacon, its pressure sensor)."""
+    surveyed beacon, its pressure sensor); ``preset``: the frame (default jmse2024)."""
     from seamodem.receive import Emissions, Receiver, ReceiverSettings
 
-    cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes)
+    cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes, preset)
     known = dict(beacon_depth_m=float(-sc.beacon[2]), vehicle_depth_m=float(-sc.track["z"])) if depths else {}
     rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True, **known),
                   payloads=rec.payloads)
@@ -162,6 +164,9 @@ def main(argv=None) -> int:
     ap.add_argument("--depths", action="store_true",
                     help="give the receiver the beacon's and the vehicle's depths (ReceiverSettings.beacon_depth_m, "
                          "vehicle_depth_m), as a vehicle knows them")
+    ap.add_argument("--preset", default="jmse2024",
+                    help="the beacon's frame (a seamodem preset, default jmse2024: the receiver's constants were "
+                         "measured on it; another one checks that they carry over)")
     ap.add_argument("--families", default=",".join(FAMILIES),
                     help="comma-separated families to run (default all; seeds as in the full run)")
     ap.add_argument("--pool", type=Path, nargs="+", metavar="FRAMES_CSV",
@@ -174,10 +179,18 @@ def main(argv=None) -> int:
     if unknown := sorted(set(only) - set(FAMILIES)):
         ap.error(f"unknown family {', '.join(unknown)} (choose from {', '.join(FAMILIES)})")
     seed = int.from_bytes(os.urandom(3), "little") if args.fresh else args.seed
-    jobs = [(fam, seed * 1000 + 37 * i + j, args.frames, True, args.depths) for j, fam in enumerate(FAMILIES)
-            for i in range(args.recordings) if fam in only]
+    from seamodem import get_preset
+
+    from seamodem.errors import ConfigError
+
+    try:
+        get_preset(args.preset)
+    except ConfigError as exc:
+        ap.error(str(exc))
+    jobs = [(fam, seed * 1000 + 37 * i + j, args.frames, True, args.depths, args.preset)
+            for j, fam in enumerate(FAMILIES) for i in range(args.recordings) if fam in only]
     if not args.no_single_path:
-        jobs += [(f, s, n, False, d) for f, s, n, _, d in jobs]
+        jobs += [(f, s, n, False, d, p) for f, s, n, _, d, p in jobs]
     t0 = time.perf_counter()
     rows: list[dict] = []
     if args.jobs > 1:
@@ -195,7 +208,7 @@ def main(argv=None) -> int:
     title = (f"# bench_corpus{(' — ' + args.label) if args.label else ''}: base seed {seed}"
              f"{' (fresh)' if args.fresh else ''}{', the ends depths given to the receiver' if args.depths else ''}, "
              f"{args.recordings} recordings x {args.frames} frames per family, "
-             f"{n_echo} frames with echoes ({len(det)} detected), jmse2024, T_com {PERIOD} s, c {C} m/s, in-band SNR "
+             f"{n_echo} frames with echoes ({len(det)} detected), {args.preset}, T_com {PERIOD} s, c {C} m/s, in-band SNR "
              f"in [-3, 20] dB (SPEC §1); channel: benchmarks/corpus.py (independent of seamodem.channel); "
              f"{wall:.0f} s wall\n")
     text = _report(rows, title)
