@@ -2,7 +2,8 @@
 
 Run: ``python benchmarks/diagnose_corpus.py FAMILY SEED`` (a recording's seed, as in the
 ``seed`` column of ``results/bench_corpus_frames.csv``), ``--frames N``, ``--single-path``,
-``--depths`` (then also the surface image the receiver took out). Prints, per frame: the record's
+``--depths`` (then also the surface image the receiver took out), ``--preset`` (the frame, as
+``bench_corpus.py --preset``). Prints, per frame: the record's
 ``v_r_source``, SNR, range and v_r errors against the corpus's direct-path truth with their σ and
 error/σ, and the whole-frame fit's paths (delay after the first [µs], |gain| relative to it); then the
 true paths of the first frame (name, delay after the direct path [µs], closing speed [m/s], gain). A
@@ -28,6 +29,7 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=10)
     ap.add_argument("--single-path", action="store_true", help="the same recording with its echoes removed")
     ap.add_argument("--depths", action="store_true", help="give the receiver the ends' depths")
+    ap.add_argument("--preset", default="jmse2024", help="the beacon's frame (as bench_corpus.py --preset)")
     args = ap.parse_args(argv)
 
     import bench_corpus
@@ -57,7 +59,7 @@ def main(argv=None) -> int:
     bench_corpus.synthesize = recording_synthesis
     try:
         rows = bench_corpus.run_recording(args.family, args.seed, args.frames, echoes=not args.single_path,
-                                          depths=args.depths)
+                                          depths=args.depths, preset=args.preset)
     finally:
         frame.fit_whole_frame = fit_whole_frame
         bench_corpus.synthesize = synthesize
@@ -78,7 +80,7 @@ def main(argv=None) -> int:
 
         first = next((r for r in rows if r["detected"]), None)
         if first is not None:
-            cfg = get_preset("jmse2024")
+            cfg = get_preset(args.preset)
             zb, zv = float(-sc.beacon[2]), float(-sc.track["z"])
             delta = frame.merged_image_delay_s(first["range_m"], zb, zv, config=cfg, sound_speed_mps=corpus.C)
             image = frame.merged_image_bias_s(first["range_m"], zb, zv, config=cfg, sound_speed_mps=corpus.C)
