@@ -53,7 +53,7 @@ def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_
     its λ, how far it follows a tilt of its reference, ``frame.decisions_follow``)."""
     from types import SimpleNamespace
 
-    from seamodem.receive.frame import FrameMeasurer
+    from seamodem.receive.frame import FrameMeasurer, _WholeFrame
     from seamodem.receive.frontend import plan_front_end
     from seamodem.receive.wholeframe import WholeFrameFit
 
@@ -63,7 +63,7 @@ def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_
                        sigma_delay_s=np.array([1e-6]), n_reference=1000)
     rx = FrameMeasurer(CFG, plan_front_end(CFG, FS, v_max_mps=5.0, sound_speed_mps=1500.0),
                        emissions=Emissions(times_s=[0.0]))
-    rx._whole_frame = lambda *a: (wf, 0, "whole_frame_decisions", lambda: follow, 0, None)
+    rx._whole_frame = lambda *a: _WholeFrame(wf, 0, "whole_frame_decisions", lambda: follow, 0, None)
     tone = SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10), spread_hz=0.0, amp_rate_hz=0.0,
                            amp_rate_terms=np.zeros((2, 2)))
     m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=tone,
@@ -78,7 +78,7 @@ def test_a_decisions_fit_far_from_the_pilot_bank_grows_its_sigma_and_yields_to_t
     sigma_bank = float(pilot_velocity_crlb_mps(CFG, 6.0, sound_speed_mps=1500.0))
     # agreeing with the bank (within 3 of its σ): the fit and its σ as they are
     rec, timing = _decisions_fit_record(1.003, 0.002, 1.0 + 2 * sigma_bank, 1.0)
-    assert rec["v_r_source"] == "whole_frame_decisions" and rec["sigma_v_r_mps"] == 0.002 and timing[1] == 1e-6
+    assert rec["v_r_source"] == "whole_frame_decisions" and rec["sigma_v_r_mps"] == 0.002 and timing.sigma_s == 1e-6
     # 0.3 m/s from the bank (wrong decisions in runs), 0.15 m/s from a tone that is itself 0.15 m/s off the
     # bank (σ 0.12 m/s with that gap): its own σ (0.02) would pass the tone's test; grown to the gap beyond
     # 3 σ_bank (0.29) it does not: the tone is the estimate, with the pilot's arrival
@@ -88,7 +88,7 @@ def test_a_decisions_fit_far_from_the_pilot_bank_grows_its_sigma_and_yields_to_t
     rec, timing = _decisions_fit_record(1.3, 0.02, 1.0, float("nan"))
     grown = np.sqrt(0.02**2 + 0.3**2 - 9 * sigma_bank**2)
     assert rec["v_r_source"] == "whole_frame_decisions"
-    assert rec["sigma_v_r_mps"] == pytest.approx(grown) and timing[1] == pytest.approx(1e-6 * grown / 0.02)
+    assert rec["sigma_v_r_mps"] == pytest.approx(grown) and timing.sigma_s == pytest.approx(1e-6 * grown / 0.02)
 
 
 def test_a_decisions_fit_that_does_not_explain_the_frame_gets_the_tones_sigma_rule():

@@ -1090,6 +1090,43 @@ class BasebandBuffers:
         self.tone_start += cut
 
 
+class _WholeFrame(NamedTuple):
+    """A decoded frame's whole-frame fit as :meth:`FrameMeasurer._whole_frame` gives it."""
+
+    #: the fit
+    fit: WholeFrameFit
+    #: the direct path's index in it
+    first: int
+    #: "whole_frame" (decoded) or "whole_frame_decisions"
+    source: str
+    #: how far a fit on decisions follows a tilt of its reference (:func:`decisions_follow`; NaN when decoded),
+    #: computed when called
+    follow: Callable[[], float]
+    #: the index of the path the pilot's arrival took
+    pilot_path: int
+    #: the gap [s] to the pilot's fit's earliest path within 3/B before the one taken, when the frame decoded
+    #: and the fit judged the earlier ones (:func:`earlier_fitted_direct`), else None
+    near_gap_s: float | None
+
+
+class _FitTiming(NamedTuple):
+    """The whole-frame fit's arrival of the direct path, as :meth:`FrameMeasurer._doppler` gives it."""
+
+    #: its arrival [s]
+    t_s: float
+    #: its σ [s] (the fit's noise, and the time scale the Doppler's unmodelled σ gives the instants)
+    sigma_s: float
+    #: the channel shape's σ [s] (``channel_shape_delay_s``), which the pilot's arrival shares
+    sigma_shape_s: float
+    #: the direct path's κ among the fit's paths with the ends' depths, else 1
+    kappa: float
+    #: how far after the direct path the path the pilot's arrival took lies [s] (0 unless the whole frame
+    #: found a direct path the pilot's fit missed or took as an echo's precursor)
+    lead_s: float
+    #: ``_WholeFrame.near_gap_s``
+    near_gap_s: float | None
+
+
 class FrameMeasurer:
     """One detected frame in its basebands → its measurement record (and decoded payload when asked).
 
@@ -1289,7 +1326,7 @@ class FrameMeasurer:
         sigma_tau = math.hypot(sigma_tau, doppler.pop("sigma_tau_pilot_pull"))
         if doppler["v_r_source"] == "whole_frame":
             if timing is not None:
-                self._pilot_gaps.append((timing[0] + timing[4] - t_arr) ** 2 - timing[1] ** 2 - sigma_tau**2)
+                self._pilot_gaps.append((timing.t_s + timing.lead_s - t_arr) ** 2 - timing.sigma_s**2 - sigma_tau**2)
         elif self._pilot_gaps:
             # the pilot's arrival is the range: the last decoded frames' gaps between their pilot's arrival and
             # their whole frame's, beyond both σ's, are this channel's (an impulsive recording's surface echo
@@ -1307,8 +1344,9 @@ class FrameMeasurer:
         kappa = 1.0  # the whole-frame fit's direct path's κ (joint_delay_inflation), when it has one
         # (a direct path the pilot's fit missed, which the whole frame found: ``lead`` before the pilot's)
         # (of the pilot's earlier paths, those the decoded frame's whole-frame fit judged are not in the gap)
-        lead = 0.0 if timing is None else timing[4]
-        gap_first = timing[5] if timing is not None and timing[5] is not None else earlier_path_gap_s(m)
+        lead = 0.0 if timing is None else timing.lead_s
+        gap_first = timing.near_gap_s if timing is not None and timing.near_gap_s is not None \
+            else earlier_path_gap_s(m)
         sigma_first = max(0.0, gap_first - lead)
         # the direct path's data-aided arrival over the frame, when decoded. Not on decisions: they were taken
         # at the pilot's timing, and pull the fit's arrival towards it (22 single-path frames at −3…−1 dB,
@@ -1325,7 +1363,7 @@ class FrameMeasurer:
             # the channel's shape (a merged echo) biases both arrivals alike: it is not in their gap, and goes
             # to the σ of the one used (in the gap's expectation on decisions, a fit 39 mm off kept σ 2.8 mm)
             # (the pilot's arrival is compared with the whole frame's of the same path: ``lead`` after the direct)
-            t_fit, sigma_fit, sigma_shape, kappa, _, _ = timing
+            t_fit, sigma_fit, sigma_shape, kappa = timing.t_s, timing.sigma_s, timing.sigma_shape_s, timing.kappa
             gap_k = 9 if doppler["v_r_source"] == "whole_frame" else 1
             excess = (t_fit + lead - t_arr) ** 2 - gap_k * (sigma_fit**2 + sigma_tau**2)
             if doppler["v_r_source"] == "whole_frame":
@@ -1424,15 +1462,12 @@ class FrameMeasurer:
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
                  excess: float, snr_direct_db: float, range_m: float = math.nan
-                 ) -> tuple[dict, tuple[float, float, float, float, float, float | None] | None]:
+                 ) -> tuple[dict, _FitTiming | None]:
         """v_r_mps, its σ and source (and the bank's σ, ``sigma_bank``): the direct path's whole-frame Doppler
-        when decoded, else the tone ML; and (arrival [s], its σ [s], the channel shape's σ [s], which the
-        pilot's arrival shares: ``channel_shape_delay_s``; the direct path's κ with the ends' depths, else 1;
-        how far after it the path the pilot's arrival took lies [s], 0 unless the whole frame found a direct
-        path the pilot's fit missed or took as an echo's precursor: :func:`missed_direct_lag_s`,
-        :func:`earlier_fitted_direct`; the gap [s] to the pilot's fit's earliest path within 3/B before the one
-        it took when the decoded frame's fit judged those further, else None) of the direct path from the
-        whole-frame fit, or None. ``range_m`` (nan when unknown) takes the spreading out of the frames'
+        when decoded, else the tone ML; and the direct path's arrival from the whole-frame fit
+        (:class:`_FitTiming`: its arrival, σ, the channel shape's σ, which the pilot's arrival shares, κ, how
+        far after it the path the pilot's arrival took lies: :func:`missed_direct_lag_s`,
+        :func:`earlier_fitted_direct`, and the gap to the pilot's earlier paths within 3/B), or None. ``range_m`` (nan when unknown) takes the spreading out of the frames'
         amplitude change, and gives a merged surface image with the depths (:meth:`merged_image`): the
         channel bend it explains is not counted.
 
@@ -1475,24 +1510,24 @@ class FrameMeasurer:
         sigma_tone_gap = tone_fallback_sigma_mps(sigma_tone, sigma_bank, gap, echoes=len(m.paths.delays_s) > 1)
         fit = (self._whole_frame(m, dec, bb, t0_s, fs, image)
                if dec is not None and self.settings.whole_frame_doppler else None)
-        if fit is not None and fit[2] == "whole_frame":
+        if fit is not None and fit.source == "whole_frame":
             # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
-            self._curvature_pool.add_fit(fit[0], fit[1], image, range_m)
-            echoes = fit_echoes(fit[0], fit[1])
+            self._curvature_pool.add_fit(fit.fit, fit.first, image, range_m)
+            echoes = fit_echoes(fit.fit, fit.first)
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
         pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
-        if fit is not None and fit[2] == "whole_frame_decisions":
+        if fit is not None and fit.source == "whole_frame_decisions":
             # decided symbols can be wrong in runs and pull the fit away: they bias every segment alike,
             # which the segments' scatter does not see (1 frame in 100 at 6–12 dB in the benchmark's deep
             # echoes, raw BER 0.16–0.5: −435 mm/s with σ 21 mm/s). The pilot bank does not use them: its
             # gap to the fit beyond 3 of its σ is added to the fit's σ (as to the tone's), and to the
             # timing's in proportion; the fit is then kept only when the tone agrees and its σ is the smaller
-            v, sigma = float(fit[0].v_mps[fit[1]]), float(fit[0].sigma_v_mps[fit[1]])
+            v, sigma = float(fit.fit.v_mps[fit.first]), float(fit.fit.sigma_v_mps[fit.first])
             grown = math.sqrt(sigma**2 + max(0.0, (v - m.pilot.v_mps) ** 2 - 9 * sigma_bank**2))
             inflation = grown / sigma if sigma > 0 else 1.0
             # decisions that do not explain the frame: the fit's direct-path Es/N0 (from its residual) far
@@ -1505,8 +1540,8 @@ class FrameMeasurer:
             # (decisions_follow; NaN, a refit that failed, counts so), is no better known: it stands on
             # which decisions the tilt flips
             expected = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
-            if (float(fit[0].es_n0[fit[1]]) < _DECISIONS_MIN_ES_N0_SHARE * expected
-                    or not 0.0 <= fit[3]() <= _DECISIONS_MAX_FOLLOW):
+            if (float(fit.fit.es_n0[fit.first]) < _DECISIONS_MIN_ES_N0_SHARE * expected
+                    or not 0.0 <= fit.follow() <= _DECISIONS_MAX_FOLLOW):
                 grown = math.sqrt(sigma**2 + (v - m.pilot.v_mps) ** 2 + sigma_bank**2)
                 inflation = grown / sigma if sigma > 0 else 1.0
                 if math.isfinite(v_tone) and not grown < sigma_tone_gap:
@@ -1518,9 +1553,9 @@ class FrameMeasurer:
         # arrival through the pilot's sidelobes (pilot_sidelobe_sigma_s)
         shown = fit if fit is not None else (rejected[2] if rejected is not None else None)
         pilot_pull = 0.0 if shown is None else pilot_sidelobe_sigma_s(
-            shown[0], shown[4], m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
-        pilot_excess = 1.0 if shown is None else float(shown[0].pilot_noise_excess)
-        if (fit is None or fit[2] != "whole_frame") and self._decoded_echoes:
+            shown.fit, shown.pilot_path, m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
+        pilot_excess = 1.0 if shown is None else float(shown.fit.pilot_noise_excess)
+        if (fit is None or fit.source != "whole_frame") and self._decoded_echoes:
             # the pilot's arrival is the range: the echoes of the last decoded frames pull it too (the median
             # of their pulls), where this frame's own fit on decisions did not see them (an impulsive
             # recording's bottom echo at 82 µs, which decoded fits found at 83–120 µs and one on decisions at
@@ -1529,13 +1564,13 @@ class FrameMeasurer:
                                                             eps=m.pilot.v_mps / c))
         sigma_tau_rejected = 0.0
         if rejected is not None:
-            sigma_tau_rejected = unmodelled_sigmas(rejected[2][0], rejected[2][1], self.config, sound_speed_mps=c,
+            sigma_tau_rejected = unmodelled_sigmas(rejected[2].fit, rejected[2].first, self.config, sound_speed_mps=c,
                                                    pooled_merge_delay_s=pooled_merge, image=image)[1]
             # two independent estimates of the same speed further apart than 3 combined σ: one of them is
             # wrong and the frame does not say which, so the one used (the tone) has a σ that covers the gap
             gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
             sigma_tone_gap = math.sqrt(sigma_tone_gap**2 + max(0.0, gap_fit2))
-        if fit is not None and math.isfinite(fit[0].v_mps[fit[1]]):
+        if fit is not None and math.isfinite(fit.fit.v_mps[fit.first]):
             wf, first, source, _, pilot_path, near_gap = fit
             v, sigma = float(wf.v_mps[first]), float(wf.sigma_v_mps[first]) * inflation
             # decoded frames feed the pool (wrong decisions move a fit's amplitudes), fits on decisions use it:
@@ -1580,9 +1615,10 @@ class FrameMeasurer:
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
                         v_r_drift_mps2=float(wf.accel_mps2[first]),
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate), doppler_image)), \
-                (float(wf.delays_s[first]), sigma_tau_fit, shape,
-                 direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps, sound_speed_mps=c)
-                 if self.images_modelled else 1.0, float(wf.delays_s[pilot_path] - wf.delays_s[first]), near_gap)
+                _FitTiming(float(wf.delays_s[first]), sigma_tau_fit, shape,
+                           direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps,
+                                             sound_speed_mps=c) if self.images_modelled else 1.0,
+                           float(wf.delays_s[pilot_path] - wf.delays_s[first]), near_gap)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
@@ -1596,12 +1632,10 @@ class FrameMeasurer:
                     n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_unmodelled), None
 
     def _whole_frame(self, m: FrameMeasurement, dec: FrameDecode, bb, t0_s: float, fs: float,
-                     image: MergedImage | None = None):
-        """(WholeFrameFit, index of the first path, source, λ, index of the path the pilot's arrival took, the
-        gap [s] to the pilot's fit's earliest path within 3/B before that one when the frame decoded and the
-        fit judged the earlier ones, else None) of a decoded
-        frame, or None; λ() is how far a fit on decisions follows a tilt of its reference
-        (:func:`decisions_follow`; NaN when decoded), computed when asked. On a decoded frame, a path of the
+                     image: MergedImage | None = None) -> _WholeFrame | None:
+        """The whole-frame fit of a decoded frame (:class:`_WholeFrame`: the fit, the direct path's index,
+        the source, how far a fit on decisions follows a tilt of its reference, the path the pilot's arrival
+        took, the gap to the pilot's earlier paths within 3/B), or None. On a decoded frame, a path of the
         fit before the pilot's that stands out over the whole frame (:func:`earlier_fitted_direct`) is the
         direct path; else, when the fit's residual holds one there (:func:`missed_direct_lag_s`), the frame is
         fitted again with it, and it is the direct path when that fit explains the frame better. A merged
@@ -1691,7 +1725,7 @@ class FrameMeasurer:
                     return math.nan
                 return float(wf.v_mps[first])
             return decisions_follow(soft, cfg, speed, sound_speed_mps=c)
-        return wf, first, source, follow, pilot_path, near_gap
+        return _WholeFrame(wf, first, source, follow, pilot_path, near_gap)
 
 
 #: the radial jerk the track check allows [m/s³] (``RecordLookahead``): circling at 8 m radius and
