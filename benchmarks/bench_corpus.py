@@ -180,7 +180,6 @@ def main(argv=None) -> int:
         ap.error(f"unknown family {', '.join(unknown)} (choose from {', '.join(FAMILIES)})")
     seed = int.from_bytes(os.urandom(3), "little") if args.fresh else args.seed
     from seamodem import get_preset
-
     from seamodem.errors import ConfigError
 
     try:
@@ -208,8 +207,8 @@ def main(argv=None) -> int:
     title = (f"# bench_corpus{(' — ' + args.label) if args.label else ''}: base seed {seed}"
              f"{' (fresh)' if args.fresh else ''}{', the ends depths given to the receiver' if args.depths else ''}, "
              f"{args.recordings} recordings x {args.frames} frames per family, "
-             f"{n_echo} frames with echoes ({len(det)} detected), {args.preset}, T_com {PERIOD} s, c {C} m/s, in-band SNR "
-             f"in [-3, 20] dB (SPEC §1); channel: benchmarks/corpus.py (independent of seamodem.channel); "
+             f"{n_echo} frames with echoes ({len(det)} detected), {args.preset}, T_com {PERIOD} s, c {C} m/s, "
+             f"in-band SNR in [-3, 20] dB (SPEC §1); channel: benchmarks/corpus.py (independent of seamodem.channel); "
              f"{wall:.0f} s wall\n")
     text = _report(rows, title)
     print(text)

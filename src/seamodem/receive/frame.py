@@ -1467,9 +1467,10 @@ class FrameMeasurer:
         when decoded, else the tone ML; and the direct path's arrival from the whole-frame fit
         (:class:`_FitTiming`: its arrival, σ, the channel shape's σ, which the pilot's arrival shares, κ, how
         far after it the path the pilot's arrival took lies: :func:`missed_direct_lag_s`,
-        :func:`earlier_fitted_direct`, and the gap to the pilot's earlier paths within 3/B), or None. ``range_m`` (nan when unknown) takes the spreading out of the frames'
-        amplitude change, and gives a merged surface image with the depths (:meth:`merged_image`): the
-        channel bend it explains is not counted.
+        :func:`earlier_fitted_direct`, and the gap to the pilot's earlier paths within 3/B), or None.
+        ``range_m`` (nan when unknown) takes the spreading out of the frames' amplitude change, and gives a
+        merged surface image with the depths (:meth:`merged_image`): the channel bend it explains is not
+        counted.
 
         The tone sums every path; it is flagged as multipath-biased when it and
         the direct path's own estimate (whole-frame fit, else the pilot bank)
