@@ -58,7 +58,7 @@ def test_a_direct_path_left_out_of_the_fit_is_found_before_the_path_taken(seed, 
     assert lag == pytest.approx(-LATE_S, abs=1.0 / PLAN.fs_data)
     assert abs(amp) / abs(fit.amplitudes[0]) == pytest.approx(abs(gain), rel=0.2)
     assert z2 > 100
-    assert missed_direct_lag_s(fit, 0, CFG) == pytest.approx(-LATE_S, abs=1.0 / PLAN.fs_data)
+    assert missed_direct_lag_s(fit, 0) == pytest.approx(-LATE_S, abs=1.0 / PLAN.fs_data)
     # fitted again with it, as the receiver does, the direct path's arrival is within its σ's reach
     refit = _fit(bb, [ta + lag + LATE_S, ta + LATE_S], ta + lag + LATE_S)
     assert refit.noise_var < fit.noise_var
@@ -73,7 +73,7 @@ def test_noise_before_a_lone_path_is_not_taken_for_one():
         bb, ta = _frame(100 + seed, direct_gain=0.0, snr_db=[-2.0, 6.0, 20.0][seed % 3])
         fit = _fit(bb, [ta + LATE_S], ta + LATE_S)
         z2s.append(fit.earlier_path[2])
-        assert missed_direct_lag_s(fit, 0, CFG) is None
+        assert missed_direct_lag_s(fit, 0) is None
     assert max(z2s) < MISSED_DIRECT_Z2 / 2
     lags = int(REACH * PLAN.fs_data)
     assert 0.5 * math.log(lags) < np.median(z2s) < 2 * math.log(lags)

@@ -58,6 +58,7 @@ __all__ = [
     "earlier_path_gap_s",
     "missed_direct_lag_s",
     "earlier_fitted_direct",
+    "earlier_standing_out",
     "merged_image_delay_s",
     "merged_image_bias_s",
     "two_carrier_sigma_mps",
@@ -190,7 +191,7 @@ MISSED_DIRECT_Z2 = 30.0
 MISSED_DIRECT_GAIN = 0.2
 
 
-def missed_direct_lag_s(wf: WholeFrameFit, first: int, config: FrameConfig) -> float | None:
+def missed_direct_lag_s(wf: WholeFrameFit, first: int) -> float | None:
     """How far before the path taken as the direct one [s] (< 0) a decoded frame's residual holds another
     path, None when it holds none (``WholeFrameFit.earlier_path``, sought from 3/B to a pilot's length before).
 
@@ -229,13 +230,17 @@ def earlier_fitted_direct(wf: WholeFrameFit, first: int, config: FrameConfig) ->
     a0 = abs(complex(wf.amplitudes[first]))
     if not a0 > 0:
         return None
-    for p in np.argsort(wf.delays_s):
-        if (wf.delays_s[first] - wf.delays_s[p]) * config.bandwidth_hz < EARLIER_NEAREST_B:
-            break  # nearer, a merged echo's misfit stands out too (earlier_path)
-        if (wf.n_reference * float(wf.es_n0[p]) >= MISSED_DIRECT_Z2
-                and abs(complex(wf.amplitudes[p])) >= MISSED_DIRECT_GAIN * a0):
-            return int(p)
-    return None
+    taken = np.flatnonzero(earlier_standing_out(wf, first, config)
+                           & (np.abs(np.asarray(wf.amplitudes)) >= MISSED_DIRECT_GAIN * a0))
+    return int(taken[np.argmin(wf.delays_s[taken])]) if taken.size else None
+
+
+def earlier_standing_out(wf: WholeFrameFit, first: int, config: FrameConfig) -> np.ndarray:
+    """Which paths of a whole-frame fit lie at least 3/B (``EARLIER_NEAREST_B``) before ``first`` and stand out
+    over the whole frame (n·Es/N0 at least :data:`MISSED_DIRECT_Z2`); nearer, a merged echo's misfit stands
+    out too (:func:`~seamodem.receive.wholeframe.earlier_path`)."""
+    return (((wf.delays_s[first] - wf.delays_s) * config.bandwidth_hz >= EARLIER_NEAREST_B)
+            & (wf.n_reference * np.asarray(wf.es_n0, float) >= MISSED_DIRECT_Z2))
 
 
 def earlier_path_gap_s(m: FrameMeasurement) -> float:
@@ -1685,7 +1690,7 @@ class FrameMeasurer:
 
         if dec.crc_ok:
             q = earlier_fitted_direct(wf, first, cfg)
-            lag = missed_direct_lag_s(wf, first, cfg) if q is None else None
+            lag = missed_direct_lag_s(wf, first) if q is None else None
             try:
                 if q is not None:
                     # a path the pilot's fit found before the one it took, which the whole frame shows: the direct
@@ -1708,8 +1713,7 @@ class FrameMeasurer:
         near_gap = None
         if (dec.crc_ok and len(pilot_paths.delays_s)
                 and np.min(paths.delays_s) <= np.min(pilot_paths.delays_s) + 1e-9
-                and not np.any(((wf.delays_s[first] - wf.delays_s) * cfg.bandwidth_hz >= EARLIER_NEAREST_B)
-                               & (wf.n_reference * wf.es_n0 >= MISSED_DIRECT_Z2))):
+                and not np.any(earlier_standing_out(wf, first, cfg))):
             ahead = pilot_paths.first_s - np.asarray(pilot_paths.delays_s, float)
             near = ahead[(ahead > 0) & (ahead * cfg.bandwidth_hz < EARLIER_NEAREST_B)]
             near_gap = float(np.max(near)) if near.size else 0.0

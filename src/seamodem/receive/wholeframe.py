@@ -580,6 +580,15 @@ def channel_bend_s2(f_hz: np.ndarray, energy: np.ndarray, channel: np.ndarray, n
     return out
 
 
+def _peak_offset(mag: np.ndarray, i: int) -> float:
+    """The offset in [−½, ½] of the peak of the parabola through ``mag[i − 1 : i + 2]`` from ``i`` (0 at an
+    end of ``mag`` or where the three do not make a maximum)."""
+    if not 0 < i < len(mag) - 1:
+        return 0.0
+    den = mag[i - 1] - 2 * mag[i] + mag[i + 1]
+    return float(np.clip(0.5 * (mag[i - 1] - mag[i + 1]) / den, -0.5, 0.5)) if den < 0 else 0.0
+
+
 def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config: FrameConfig, *,
                      deviations: float = 4.5, max_components: int = 16,
                      known_lags_s: tuple = ()) -> tuple[np.ndarray, list]:
@@ -639,11 +648,7 @@ def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config:
         i = int(np.argmax(mag))
         if mag[i] ** 2 < deviations**2 * var:
             break
-        shift = 0.0
-        if 0 < i < len(mag) - 1:
-            den = mag[i - 1] - 2 * mag[i] + mag[i + 1]
-            shift = float(np.clip(0.5 * (mag[i - 1] - mag[i + 1]) / den, -0.5, 0.5)) if den < 0 else 0.0
-        lag = (lags[i] + shift) / up  # [samples]
+        lag = (lags[i] + _peak_offset(mag, i)) / up  # [samples]
         ramp = np.exp(-2j * np.pi * k * lag / m)
         amp = complex(np.sum(c_spec * np.conj(ramp)) / np.sum(own))  # least squares at that lag
         c_spec = c_spec - amp * own * ramp
@@ -683,13 +688,9 @@ def earlier_path(resid: np.ndarray, template: np.ndarray, fs: float, config: Fra
     lags = np.arange(-far, -near + 1)  # [samples], wrapped to the end of the padded correlation
     mag = np.abs(corr[lags % m])
     i = int(np.argmax(mag))
-    shift = 0.0
-    if 0 < i < len(mag) - 1:
-        den = mag[i - 1] - 2 * mag[i] + mag[i + 1]
-        shift = float(np.clip(0.5 * (mag[i - 1] - mag[i + 1]) / den, -0.5, 0.5)) if den < 0 else 0.0
     var = float(np.mean(np.abs(resid) ** 2)) / energy
     value = complex(corr[lags[i] % m])
-    return (lags[i] + shift) / fs, value, float(abs(value) ** 2 / var) if var > 0 else math.inf
+    return (lags[i] + _peak_offset(mag, i)) / fs, value, float(abs(value) ** 2 / var) if var > 0 else math.inf
 
 
 def split_clusters(fit: WholeFrameFit, refit, direct_s: float, *, config: FrameConfig,
