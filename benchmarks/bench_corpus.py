@@ -41,9 +41,11 @@ PERIOD = 1.0
 SNR_BINS = (-3, 3, 8, 12, 20.01)
 
 
-def recording(family: str, seed: int, n_frames: int, echoes: bool = True, preset: str = "jmse2024"):
+def recording(family: str, seed: int, n_frames: int, echoes: bool = True, preset: str = "jmse2024",
+              paths: tuple | None = None):
     """(frame config, scenario, emission times [s], the synthesized recording) of one corpus recording: the
-    beacon of ``preset`` (default jmse2024) every ``PERIOD`` through :func:`corpus.synthesize`."""
+    beacon of ``preset`` (default jmse2024) every ``PERIOD`` through :func:`corpus.synthesize` (``paths``:
+    those paths alone, as its ``only_paths``)."""
     from seamodem import BeaconSchedule, get_preset
     from seamodem.transmit.beacon import render_beacon
 
@@ -54,17 +56,18 @@ def recording(family: str, seed: int, n_frames: int, echoes: bool = True, preset
     t_emit = sched.start_s + PERIOD * np.arange(n_frames)
     band = (cfg.carrier_hz - cfg.bandwidth_hz / 2, cfg.carrier_hz + cfg.bandwidth_hz / 2)
     return cfg, sc, t_emit, synthesize(sc, beacon, t_emit, cfg.sample_rate_hz, cfg.frame_duration_s, band,
-                                       echoes=echoes)
+                                       echoes=echoes, only_paths=paths)
 
 
 def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False,
-                  preset: str = "jmse2024") -> list[dict]:
+                  preset: str = "jmse2024", paths: tuple | None = None) -> list[dict]:
     """One corpus recording through the default receiver: a row per frame sent (missed frames too); with
     ``depths``, the receiver is given the beacon's and the vehicle's depths (as a vehicle has them: a
-    surveyed beacon, its pressure sensor); ``preset``: the frame (default jmse2024)."""
+    surveyed beacon, its pressure sensor); ``preset``: the frame (default jmse2024); ``paths``: those paths
+    alone (:func:`recording`)."""
     from seamodem.receive import Emissions, Receiver, ReceiverSettings
 
-    cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes, preset)
+    cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes, preset, paths)
     known = dict(beacon_depth_m=float(-sc.beacon[2]), vehicle_depth_m=float(-sc.track["z"])) if depths else {}
     rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True, **known),
                   payloads=rec.payloads)

@@ -206,8 +206,14 @@ class Recording:
 
 
 def synthesize(sc: Scenario, beacon, t_emit: np.ndarray, fs: float, frame_s: float, band: tuple[float, float],
-               *, echoes: bool = True, chunk: int = 8192) -> Recording:
-    """The received recording of a rendered beacon through the scenario's channel, with noise, and its truth."""
+               *, echoes: bool = True, chunk: int = 8192, only_paths: tuple | None = None) -> Recording:
+    """The received recording of a rendered beacon through the scenario's channel, with noise, and its truth;
+    ``only_paths`` (names from :data:`PATHS`, "D" among them) keeps those paths alone, the others' draws
+    unchanged (which path makes what a receiver does: diagnose_corpus.py --paths)."""
+    if only_paths is not None:
+        unknown = sorted(set(only_paths) - set(PATHS))
+        if unknown or "D" not in only_paths:
+            raise ValueError(f"paths must be among {', '.join(PATHS)} and include D, got {', '.join(only_paths)}")
     rng = np.random.default_rng(sc.seed + 7919)
     x = np.zeros(beacon.n_samples)
     for k in range(len(t_emit)):
@@ -216,7 +222,7 @@ def synthesize(sc: Scenario, beacon, t_emit: np.ndarray, fs: float, frame_s: flo
     xa = hilbert(x)
     t_mid = t_emit + frame_s / 2
     direct_len = C * path_delay(sc, "D", t_mid)
-    paths = PATHS if echoes else ("D",)
+    paths = (PATHS if echoes else ("D",)) if only_paths is None else tuple(p for p in PATHS if p in only_paths)
     gains = {}
     for p in paths:
         lens = C * path_delay(sc, p, t_mid)
