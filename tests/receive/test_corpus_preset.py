@@ -26,3 +26,17 @@ def test_the_corpus_runs_the_oceans2021_frame_and_its_sigma_covers_the_error():
     for col, sig, truth in (("range_m", "sigma_range_m", "range_true_m"), ("v_r_mps", "sigma_v_r_mps", "v_r_true_mps")):
         z = np.array([abs(r[col] - r[truth]) / r[sig] for r in rows])
         assert np.all(z <= 3), (col, z)
+
+
+def test_the_corpus_keeps_the_paths_asked_for_and_the_rest_of_the_recording():
+    import pytest
+    from bench_corpus import recording
+
+    _, _, _, full = recording("far", 31001, 1)
+    _, _, _, some = recording("far", 31001, 1, paths=("D", "B"))
+    assert [p[0] for p in some.truth[0]["paths"]] == ["D", "B"]
+    by_name = {p[0]: p for p in full.truth[0]["paths"]}
+    for p in some.truth[0]["paths"]:  # the same geometry and gains: the other paths only left out
+        assert p == by_name[p[0]]
+    with pytest.raises(ValueError, match="include D"):
+        recording("far", 31001, 1, paths=("S", "B"))
