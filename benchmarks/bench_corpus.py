@@ -34,7 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from corpus import C, FAMILIES, draw_scenario, synthesize  # noqa: E402
+from corpus import C, FAMILIES, draw_scenario, receiver_position, synthesize  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "bench_corpus.txt"
 PERIOD = 1.0
@@ -60,15 +60,20 @@ def recording(family: str, seed: int, n_frames: int, echoes: bool = True, preset
 
 
 def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, depths: bool = False,
-                  preset: str = "jmse2024", paths: tuple | None = None) -> list[dict]:
+                  preset: str = "jmse2024", paths: tuple | None = None, depth_log: bool = True) -> list[dict]:
     """One corpus recording through the default receiver: a row per frame sent (missed frames too); with
     ``depths``, the receiver is given the beacon's and the vehicle's depths (as a vehicle has them: a
     surveyed beacon, its pressure sensor); ``preset``: the frame (default jmse2024); ``paths``: those paths
-    alone (:func:`recording`)."""
+    alone (:func:`recording`). A vehicle that changes depth (a track with ``climb_mps``) gives its depth log
+    (10 Hz, as its pressure sensor), or with ``depth_log`` False its depth at the start alone."""
     from seamodem.receive import Emissions, Receiver, ReceiverSettings
 
     cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes, preset, paths)
     known = dict(beacon_depth_m=float(-sc.beacon[2]), vehicle_depth_m=float(-sc.track["z"])) if depths else {}
+    if depths and depth_log and sc.track.get("climb_mps", 0.0):
+        times = np.arange(0.0, len(rec.samples) / cfg.sample_rate_hz + 0.1, 0.1)
+        known.pop("vehicle_depth_m")
+        known["vehicle_depth_log"] = (times, -receiver_position(sc, times)[:, 2])
     rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True, **known),
                   payloads=rec.payloads)
     found = {r.frame_index: r for r in rx.run([rec.samples], fs=cfg.sample_rate_hz) if 0 <= r.frame_index < n_frames}

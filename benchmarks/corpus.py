@@ -118,14 +118,16 @@ def _line(rng, r0: float, depth: float, *, z: float) -> dict:
 
 
 def receiver_position(sc: Scenario, t: np.ndarray) -> np.ndarray:
-    """Receiver position at times t: (n, 3)."""
+    """Receiver position at times t: (n, 3); z climbs at the track's ``climb_mps`` [m/s] when it has one (a
+    vehicle diving or surfacing; the drawn tracks keep their depth)."""
     tr = sc.track
     if tr["kind"] == "circle":
         ang = tr["phase"] + tr["speed"] / tr["radius"] * t
         xy = tr["centre"][None, :] + tr["radius"] * np.stack([np.cos(ang), np.sin(ang)], axis=1)
     else:
         xy = tr["start"][None, :] + t[:, None] * tr["velocity"][None, :]
-    return np.concatenate([xy, np.full((len(t), 1), tr["z"])], axis=1)
+    z = tr["z"] + tr.get("climb_mps", 0.0) * np.asarray(t, dtype=float)
+    return np.concatenate([xy, z[:, None]], axis=1)
 
 
 def surface_height(sc: Scenario, t: np.ndarray) -> np.ndarray:

@@ -133,3 +133,52 @@ def test_ranges_without_the_depths_note_the_surface_image_they_may_carry(beacon,
     # with the depths the image is taken out: no note
     assert main(["rx", str(beacon[2]), "-o", str(out), "--beacon-depth", "2", "--vehicle-depth", "3"]) == 0
     assert "Lloyd's mirror" not in capsys.readouterr().out
+
+
+def test_a_depth_log_gives_each_frame_the_vehicles_depth_at_its_arrival(beacon, delayed, tmp_path):
+    # a log that holds the vehicle at 3 m gives the records of --vehicle-depth 3, with and without a profile;
+    # one that dives gives each frame the image of its own depth
+    from seamodem.receive.frame import merged_image_bias_s
+
+    still, logged, diving = tmp_path / "still.csv", tmp_path / "logged.csv", tmp_path / "diving.csv"
+    (tmp_path / "still_log.csv").write_text("t_s,depth_m\n0,3\n100,3\n")
+    (tmp_path / "dive_log.csv").write_text("t_s,depth_m\n0,1\n10,11\n")
+    common = ["-q", "--beacon-depth", "2"]
+    assert main(["rx", str(beacon[2]), "-o", str(still), "--vehicle-depth", "3"] + common) == 0
+    assert main(["rx", str(beacon[2]), "-o", str(logged), "--vehicle-depth-log", str(tmp_path / "still_log.csv")]
+                + common) == 0
+    (a, _), (b, header) = read_measurements(still), read_measurements(logged)
+    assert [(r.range_m, r.sigma_range_m, r.v_r_mps) for r in a] == [(r.range_m, r.sigma_range_m, r.v_r_mps) for r in b]
+    assert header["vehicle_depth_log"] == [[0.0, 100.0], [3.0, 3.0]]
+    profile = ["--sound-speed-profile", str(delayed / "svp.csv"), "--beacon-depth", "25"]
+    assert main(["rx", str(delayed / "delayed.wav"), "-o", str(still), "-q", "--vehicle-depth", "5"] + profile) == 0
+    (tmp_path / "five.csv").write_text("t_s,depth_m\n0,5\n100,5\n")
+    assert main(["rx", str(delayed / "delayed.wav"), "-o", str(logged), "-q", "--vehicle-depth-log",
+                 str(tmp_path / "five.csv")] + profile) == 0
+    (a, _), (b, header) = read_measurements(still), read_measurements(logged)
+    assert [r.horizontal_range_m for r in a] == [r.horizontal_range_m for r in b]
+    assert header["vehicle_depth_log"] == [[0.0, 100.0], [5.0, 5.0]]
+    assert header["vehicle_depth_log_file"] == str(tmp_path / "five.csv")
+    assert main(["rx", str(beacon[2]), "-o", str(diving), "--vehicle-depth-log", str(tmp_path / "dive_log.csv")]
+                + common) == 0
+    plain = tmp_path / "plain.csv"
+    assert main(["rx", str(beacon[2]), "-o", str(plain), "-q"]) == 0
+    recs, dive_recs = read_measurements(plain)[0], read_measurements(diving)[0]
+    for r, d in zip(recs, dive_recs, strict=True):
+        depth = float(np.interp(r.t_arrival_s, [0.0, 10.0], [1.0, 11.0]))
+        bias = merged_image_bias_s(r.range_m, 2.0, depth, config=get_preset("jmse2024"), sound_speed_mps=1500.0)[0]
+        assert d.range_m == pytest.approx(r.range_m - 1500.0 * bias, abs=1e-9)
+
+
+@pytest.mark.parametrize("log, extra, words", [
+    ("t_s,depth_m\n0,3\n", ["--vehicle-depth", "3"], "not both"),
+    ("t_s,z_m\n0,3\n", [], "depth_m"),
+    ("t_s,depth_m\n0,-3\n", [], "depth"),
+])
+def test_a_depth_log_that_cannot_be_used_is_a_one_line_error(beacon, tmp_path, capsys, log, extra, words):
+    out = tmp_path / "m.csv"
+    (tmp_path / "depth.csv").write_text(log)
+    assert main(["rx", str(beacon[2]), "-o", str(out), "-q", "--beacon-depth", "2", "--vehicle-depth-log",
+                 str(tmp_path / "depth.csv")] + extra) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and words in err and not out.exists(), err

@@ -73,6 +73,10 @@ def add_parser(sub) -> None:
                         "too) a surface image merged with the direct path: its bias on the arrival predicted and "
                         "taken out, the σ what the waves and the reflection leave of it")
     g.add_argument("--vehicle-depth", type=float, metavar="M", help="vehicle depth [m] (as --beacon-depth)")
+    g.add_argument("--vehicle-depth-log", metavar="DEPTH.csv",
+                   help="in place of --vehicle-depth for a vehicle that changes depth: its depth log (columns t_s "
+                        "on the recording's clock and depth_m, as nav track --depth-log), each frame taking the "
+                        "depth at its arrival")
     g.add_argument("--wave-amplitude", type=float, default=0.5, metavar="M",
                    help="with the depths: the waves' amplitude [m] (half their height) that the merged surface "
                         "image rides, in its σ's")
@@ -219,9 +223,28 @@ def _frame_emissions(args, recording: str, sidecar, duration_s: float):
     return Emissions(times_s=times)
 
 
+def _depth_log(args):
+    """--vehicle-depth-log's (times, depths), read once; None without it."""
+    path = getattr(args, "vehicle_depth_log", None)
+    if path is None:
+        return None
+    if args.vehicle_depth is not None:
+        raise SeamodemError("vehicle-depth-log: give --vehicle-depth or --vehicle-depth-log, not both")
+    if getattr(args, "_depth_log", None) is None:
+        from ..navigation.logs import read_depth
+
+        log = read_depth(path, what="vehicle depth log")
+        args._depth_log = (tuple(log["t_s"]), tuple(log["depth_m"]))
+    return args._depth_log
+
+
+def _vehicle_depth_given(args) -> bool:
+    return args.vehicle_depth is not None or getattr(args, "vehicle_depth_log", None) is not None
+
+
 def _water_profile(args, profile, sidecar: dict | None):
     """The profile of --sound-speed-profile, else (with both depths given) the simulated recording's sidecar's."""
-    depths = (args.beacon_depth, args.vehicle_depth)
+    depths = (args.beacon_depth, True if _vehicle_depth_given(args) else None)
     if profile is None and depths == (None, None):
         return None
     if None in depths:
@@ -250,8 +273,13 @@ def _settings(args, sidecar: dict | None, profile=None):
         if not args.quiet:
             print(f"two-way recording: turnaround {turnaround:g} s from its sidecar")
     c, origin = sound_speed(args, sidecar)
+    log = _depth_log(args)
     if profile is not None and args.sound_speed is None:
-        c, origin = float(profile.c(args.vehicle_depth)), f"sound-speed profile at the vehicle's {args.vehicle_depth:g} m"
+        if log is None:
+            c, origin = float(profile.c(args.vehicle_depth)), f"sound-speed profile at the vehicle's {args.vehicle_depth:g} m"
+        else:
+            depth = statistics.median(log[1])
+            c, origin = float(profile.c(depth)), f"sound-speed profile at the vehicle's median depth {depth:g} m"
     return ReceiverSettings(
         sound_speed_mps=c,
         clock_offset_s=args.clock_offset,
@@ -264,6 +292,7 @@ def _settings(args, sidecar: dict | None, profile=None):
         # the depths give the arrival's σ its merged-surface-image term (with or without a profile)
         beacon_depth_m=args.beacon_depth,
         vehicle_depth_m=args.vehicle_depth,
+        vehicle_depth_log=log,
         wave_amplitude_m=getattr(args, "wave_amplitude", 0.5),
         wave_period_s=getattr(args, "wave_period", 3.0),
         **({} if getattr(args, "lookahead", None) is None else {"lookahead_frames": args.lookahead}),
@@ -351,7 +380,7 @@ def run(args: argparse.Namespace) -> int:
         raise SeamodemError(f"output: must end in .csv or .jsonl, got {str(out)!r}")
     if batch and args.array:
         raise SeamodemError("array: a hydrophone array is received from a single recording (give one file)")
-    if batch and (args.sound_speed_profile or args.beacon_depth is not None or args.vehicle_depth is not None):
+    if batch and (args.sound_speed_profile or args.beacon_depth is not None or _vehicle_depth_given(args)):
         raise SeamodemError("sound-speed-profile: applied to a single recording only (give one file)")
     if batch and args.plot:
         raise SeamodemError("plot: figures are drawn for a single recording only (drop --plot, or give one file)")
@@ -404,6 +433,8 @@ def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) 
             header |= {"sound_speed_profile": inputs.profile.to_dict(), "beacon_depth_m": args.beacon_depth,
                        "vehicle_depth_m": args.vehicle_depth,
                        "range_m": "straight-line distance of the direct ray traced through the profile"}
+        if getattr(args, "vehicle_depth_log", None) is not None:
+            header["vehicle_depth_log_file"] = args.vehicle_depth_log  # (its samples: vehicle_depth_log)
         if live:
             return write_live(args, out, records, header, inputs.source, run)
         counted = _Counted(records)
@@ -421,7 +452,7 @@ def _run_one(args: argparse.Namespace, out: Path | None, *, live: bool = False) 
             if counted.ber_frames:
                 line += f"; bit error rate {counted.ber_sum / counted.ber_frames:.2e} after decoding"
             print(line)
-        if args.beacon_depth is None or args.vehicle_depth is None:
+        if args.beacon_depth is None or not _vehicle_depth_given(args):
             note = lloyd_mirror_note(counted.ranges_m, counted.sigmas_m, inputs.config,
                                      sound_speed_mps=inputs.settings.sound_speed_mps)
             if note:
@@ -472,15 +503,18 @@ def _along_the_ray(records, inputs: _Inputs, args):
     from ..water.ranging import ProfileRanging
 
     c_max = float(inputs.profile.c_mps.max())
-    ranging = ProfileRanging(inputs.profile, args.beacon_depth, [args.vehicle_depth],
+    s = inputs.settings
+    log = s.vehicle_depth_log
+    ranging = ProfileRanging(inputs.profile, args.beacon_depth, [args.vehicle_depth] if log is None else log[1],
                              max_range_m=min((inputs.source.duration_s or math.inf) * c_max, 20_000.0) + 10.0)
-    c = inputs.settings.sound_speed_mps
+    c = s.sound_speed_mps
     for rec in records:
         if math.isfinite(rec.tof_s):
-            r = float(ranging.horizontal_range(rec.tof_s, args.vehicle_depth))
+            depth = s.vehicle_depth_at(rec.t_arrival_s)  # (with a depth log, the vehicle's at the arrival)
+            r = float(ranging.horizontal_range(rec.tof_s, depth))
             if math.isfinite(r):
-                slant = float(ranging.slant_range(rec.tof_s, args.vehicle_depth))
-                per_s = float(ranging.range_per_second(rec.tof_s, args.vehicle_depth)) * r / max(slant, 1e-9)
+                slant = float(ranging.slant_range(rec.tof_s, depth))
+                per_s = float(ranging.range_per_second(rec.tof_s, depth)) * r / max(slant, 1e-9)
                 rec = dataclasses.replace(rec, range_m=slant, horizontal_range_m=r,
                                           sigma_range_m=rec.sigma_range_m / c * per_s)
         yield rec

@@ -1379,7 +1379,7 @@ class FrameMeasurer:
         sigma_tau = math.hypot(sigma_tau, sigma_first)
         if s.turnaround_s is None:
             tof = t_arr - t_emit - s.clock_offset_s
-            image = self.merged_image(c * tof)
+            image = self.merged_image(c * tof, t_arr)
             if image is not None:
                 # the ends' depths give the surface image and its phase: a merged one's bias on the arrival is
                 # taken out, with its σ (the phase and reflection not known); the channel bend it makes was
@@ -1440,26 +1440,28 @@ class FrameMeasurer:
         to 0.896; with the depths the image is taken out instead, and so are the misfit and the ripple
         (the depth report's fading range RMS err/σ 0.63 → 0.79, far 0.31 → 0.43)."""
         s = self.settings
-        return s.turnaround_s is None and s.beacon_depth_m is not None and s.vehicle_depth_m is not None
+        return s.turnaround_s is None and s.beacon_depth_m is not None and (
+            s.vehicle_depth_m is not None or s.vehicle_depth_log is not None)
 
-    def merged_image(self, range_m: float) -> MergedImage | None:
-        """The surface image merged with the direct path at ``range_m`` (one-way, the ends' depths given), whose
-        bias is taken out of the arrival (:func:`merged_image_bias_s`); None without one."""
+    def merged_image(self, range_m: float, t_s: float = math.nan) -> MergedImage | None:
+        """The surface image merged with the direct path at ``range_m`` (one-way, the ends' depths given: the
+        vehicle's at ``t_s``, the frame's arrival, with a depth log), whose bias is taken out of the arrival
+        (:func:`merged_image_bias_s`); None without one."""
         s = self.settings
         if not self.images_modelled:
             return None
-        image = merged_image_bias_s(range_m, s.beacon_depth_m, s.vehicle_depth_m, config=self.config,
+        image = merged_image_bias_s(range_m, s.beacon_depth_m, s.vehicle_depth_at(t_s), config=self.config,
                                     sound_speed_mps=s.sound_speed_mps, wave_amplitude_m=s.wave_amplitude_m,
                                     wave_period_s=s.wave_period_s)
         return image if image.delay_s > 0 else None
 
-    def doppler_image(self, range_m: float) -> MergedImage | None:
+    def doppler_image(self, range_m: float, t_s: float = math.nan) -> MergedImage | None:
         """The merged surface image whose Doppler term the whole-frame v_r's σ takes at ``range_m``: with the
-        ends' depths, :meth:`merged_image`; one-way without them, the one the channel's pooled bend shows
-        (:func:`bend_image`); None without one."""
+        ends' depths, :meth:`merged_image` (at ``t_s``, the frame's arrival, with a depth log); one-way without
+        them, the one the channel's pooled bend shows (:func:`bend_image`); None without one."""
         s = self.settings
         if self.images_modelled:
-            return self.merged_image(range_m)
+            return self.merged_image(range_m, t_s)
         if s.turnaround_s is not None:
             return None
         return bend_image(self.pooled_merge_delay_s, range_m, config=self.config, sound_speed_mps=s.sound_speed_mps,
@@ -1494,7 +1496,7 @@ class FrameMeasurer:
         """
         c = self.settings.sound_speed_mps
         v_tone = m.v_tone_ml_mps
-        image = self.merged_image(range_m)
+        image = self.merged_image(range_m, m.pilot.t_start_s)
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
         sigma_tone_noise = sigma_tone  # the two-carrier check's: lines and wander are what it measures

@@ -95,6 +95,14 @@ class ReceiverSettings:
         fitted path couples to the direct one, the delay is the arrival's σ
         (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without the
         depths the σ cannot cover that bias (docs/receiver.md).
+    vehicle_depth_log : tuple of two sequences, optional
+        The vehicle's depth over the recording, in place of ``vehicle_depth_m``
+        for a vehicle that changes depth: (times [s] on the recording's clock,
+        strictly increasing; depths [m]), each frame taking the depth at its
+        arrival (linear between samples, the end samples held outside the log:
+        :meth:`vehicle_depth_at`). A vehicle that dives while a constant depth
+        is given has its surface image predicted at the wrong delay and phase:
+        the bias taken out is another's, and the σ no longer covers it.
     wave_amplitude_m, wave_period_s : float
         The sea state the merged surface image rides, with the depths: waves
         of this amplitude [m] (half the height) and no shorter period [s]
@@ -133,6 +141,7 @@ class ReceiverSettings:
     front_end_block: int | None = None
     beacon_depth_m: float | None = None
     vehicle_depth_m: float | None = None
+    vehicle_depth_log: tuple | None = None
     wave_amplitude_m: float = 0.5
     wave_period_s: float = 3.0
     lookahead_frames: int = 5
@@ -156,6 +165,10 @@ class ReceiverSettings:
         for name in ("beacon_depth_m", "vehicle_depth_m"):
             if getattr(self, name) is not None:
                 _non_negative(name.removesuffix("_m"), getattr(self, name), "a depth >= 0 m")
+        if self.vehicle_depth_log is not None:
+            object.__setattr__(self, "vehicle_depth_log", _depth_log(self.vehicle_depth_log))
+            if self.vehicle_depth_m is not None:
+                raise ConfigError("vehicle_depth_log", "give a vehicle depth or a depth log, not both")
         _non_negative("wave_amplitude", self.wave_amplitude_m, ">= 0 m")
         _positive("wave_period", self.wave_period_s)
         n = self.lookahead_frames
@@ -168,6 +181,23 @@ class ReceiverSettings:
     @property
     def two_way(self) -> bool:
         return self.turnaround_s is not None
+
+    def vehicle_depth_at(self, t_s: float) -> float | None:
+        """The vehicle's depth [m] at ``t_s`` [s]: ``vehicle_depth_m``, else the depth log's (linear between
+        samples, its end samples held outside it), else None.
+
+        >>> s = ReceiverSettings(vehicle_depth_log=((0.0, 10.0), (2.0, 4.0)))
+        >>> s.vehicle_depth_at(2.5), s.vehicle_depth_at(-1.0), s.vehicle_depth_at(30.0)
+        (2.5, 2.0, 4.0)
+        """
+        if self.vehicle_depth_m is not None:
+            return float(self.vehicle_depth_m)
+        if self.vehicle_depth_log is None:
+            return None
+        import numpy as np
+
+        times, depths = self.vehicle_depth_log
+        return float(np.interp(float(t_s), times, depths))
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as plain values (for headers and the identity of batch parts).
@@ -211,6 +241,27 @@ class ReceiverSettings:
 
             values["equalizer"] = DfeSettings(**values["equalizer"])
         return cls(**values)
+
+
+def _depth_log(log) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A vehicle depth log (times, depths) as two tuples of floats, checked: the same length, at least one
+    sample, finite, times strictly increasing, depths >= 0."""
+    try:
+        times, depths = log
+        times = tuple(float(t) for t in times)
+        depths = tuple(float(d) for d in depths)
+    except (TypeError, ValueError):
+        raise ConfigError("vehicle_depth_log", "must be (times, depths), two sequences of numbers") from None
+    if not times or len(times) != len(depths):
+        raise ConfigError("vehicle_depth_log", f"needs as many depths as times, at least one: got {len(times)} "
+                                               f"times and {len(depths)} depths")
+    if not all(math.isfinite(v) for v in times + depths):
+        raise ConfigError("vehicle_depth_log", "holds a value that is not a finite number")
+    if any(b <= a for a, b in zip(times, times[1:])):
+        raise ConfigError("vehicle_depth_log", "its times must increase strictly")
+    if min(depths) < 0:
+        raise ConfigError("vehicle_depth_log", f"a depth >= 0 m, got {min(depths)!r}")
+    return times, depths
 
 
 @dataclass(frozen=True, kw_only=True)
