@@ -135,14 +135,14 @@ def test_ranges_without_the_depths_note_the_surface_image_they_may_carry(beacon,
     assert "Lloyd's mirror" not in capsys.readouterr().out
 
 
-def test_a_depth_log_gives_each_frame_the_vehicles_depth_at_its_arrival(beacon, delayed, tmp_path):
+def test_a_depth_log_gives_each_frame_the_vehicles_depth_at_its_arrival(beacon, delayed, tmp_path, capsys):
     # a log that holds the vehicle at 3 m gives the records of --vehicle-depth 3, with and without a profile;
     # one that dives gives each frame the image of its own depth
     from seamodem.receive.frame import merged_image_bias_s
 
     still, logged, diving = tmp_path / "still.csv", tmp_path / "logged.csv", tmp_path / "diving.csv"
     (tmp_path / "still_log.csv").write_text("t_s,depth_m\n0,3\n100,3\n")
-    (tmp_path / "dive_log.csv").write_text("t_s,depth_m\n0,1\n10,11\n")
+    (tmp_path / "dive_log.csv").write_text("t_s,depth_m\n0.5,1\n10,11\n")
     common = ["-q", "--beacon-depth", "2"]
     assert main(["rx", str(beacon[2]), "-o", str(still), "--vehicle-depth", "3"] + common) == 0
     assert main(["rx", str(beacon[2]), "-o", str(logged), "--vehicle-depth-log", str(tmp_path / "still_log.csv")]
@@ -159,13 +159,16 @@ def test_a_depth_log_gives_each_frame_the_vehicles_depth_at_its_arrival(beacon, 
     assert [r.horizontal_range_m for r in a] == [r.horizontal_range_m for r in b]
     assert header["vehicle_depth_log"] == [[0.0, 100.0], [5.0, 5.0]]
     assert header["vehicle_depth_log_file"] == str(tmp_path / "five.csv")
+    capsys.readouterr()
     assert main(["rx", str(beacon[2]), "-o", str(diving), "--vehicle-depth-log", str(tmp_path / "dive_log.csv")]
                 + common) == 0
+    err = capsys.readouterr().err  # the log starts after the recording does: said in one line
+    assert "warning: vehicle depth log" in err and "covers 0.5-10 s of the recording's 0-" in err, err
     plain = tmp_path / "plain.csv"
     assert main(["rx", str(beacon[2]), "-o", str(plain), "-q"]) == 0
     recs, dive_recs = read_measurements(plain)[0], read_measurements(diving)[0]
     for r, d in zip(recs, dive_recs, strict=True):
-        depth = float(np.interp(r.t_arrival_s, [0.0, 10.0], [1.0, 11.0]))
+        depth = float(np.interp(r.t_arrival_s, [0.5, 10.0], [1.0, 11.0]))
         bias = merged_image_bias_s(r.range_m, 2.0, depth, config=get_preset("jmse2024"), sound_speed_mps=1500.0)[0]
         assert d.range_m == pytest.approx(r.range_m - 1500.0 * bias, abs=1e-9)
 

@@ -334,6 +334,12 @@ def _inputs(args: argparse.Namespace, recording: str, source=None) -> _Inputs:
     if bits is not None and bits.size == config.n_pilot:
         pilot = (1.0 - 2.0 * bits).astype(complex)
     settings, origin = _settings(args, sidecar, profile)
+    log = settings.vehicle_depth_log
+    duration = source.duration_s
+    if log is not None and duration and (log[0][0] > 0.0 or log[0][-1] < duration):
+        warnings.warn(f"vehicle depth log {args.vehicle_depth_log} covers {log[0][0]:g}-{log[0][-1]:g} s of the "
+                      f"recording's 0-{duration:g} s: its first and last depths are held outside it", UserWarning,
+                      stacklevel=2)
     # an older or hand-made sidecar without payloads: decode without counting bit errors
     payloads = sidecar_payloads(sidecar) if sidecar is not None and settings.decode else None
     return _Inputs(recording, source, config, emissions, settings, pilot, payloads, origin, profile)
