@@ -482,8 +482,8 @@ def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> 
     >>> from seamodem import get_preset
     >>> print(lloyd_mirror_note([900.0], [0.001], get_preset("jmse2024"), sound_speed_mps=1500.0))
     ... # doctest: +NORMALIZE_WHITESPACE
-    note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth): at the median range of
-    900 m, a surface image merged with the direct path (Lloyd's mirror) makes the range about 0.9·z_b·z_v/R
+    note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth or --vehicle-depth-log): at
+    the median range of 900 m, a surface image merged with the direct path (Lloyd's mirror) makes the range about 0.9·z_b·z_v/R
     long, beyond 3 of the median σ (1 mm) for depths whose product is 3-75 m² (both ends 1.7-8.7 m
     deep), and the σ does not include it (docs/receiver.md)
     >>> lloyd_mirror_note([15.0], [0.001], get_preset("jmse2024"), sound_speed_mps=1500.0)
@@ -495,7 +495,8 @@ def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> 
     low, high = max(3 * s * r / 0.9, _SHALLOWEST_END_M**2), r * sound_speed_mps / (2 * config.bandwidth_hz)
     if not low < high:
         return ""
-    return (f"note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth): at the median range "
+    return (f"note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth or --vehicle-depth-log): "
+            f"at the median range "
             f"of {r:.3g} m, a surface image merged with the direct path (Lloyd's mirror) makes the range about "
             f"0.9·z_b·z_v/R long, beyond 3 of the median σ ({s * 1e3:.2g} mm) for depths whose product is "
             f"{low:.2g}-{high:.2g} m² (both ends {math.sqrt(low):.2g}-{math.sqrt(high):.2g} m deep), and the σ "
