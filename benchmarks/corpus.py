@@ -210,8 +210,10 @@ class Recording:
 def synthesize(sc: Scenario, beacon, t_emit: np.ndarray, fs: float, frame_s: float, band: tuple[float, float],
                *, echoes: bool = True, chunk: int = 8192, only_paths: tuple | None = None) -> Recording:
     """The received recording of a rendered beacon through the scenario's channel, with noise, and its truth;
-    ``only_paths`` (names from :data:`PATHS`, "D" among them) keeps those paths alone, the others' draws
-    unchanged (which path makes what a receiver does: diagnose_corpus.py --paths)."""
+    ``only_paths`` (names from :data:`PATHS`, "D" among them) keeps those paths alone, with the geometry,
+    gains and Doppler they have in the full recording (which path makes what a receiver does:
+    diagnose_corpus.py --paths); the noise keeps the nominal SNR over the paths kept, and a fading
+    family's fading draws follow the paths kept."""
     if only_paths is not None:
         unknown = sorted(set(only_paths) - set(PATHS))
         if unknown or "D" not in only_paths:

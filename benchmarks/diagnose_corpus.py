@@ -3,8 +3,9 @@
 Run: ``python benchmarks/diagnose_corpus.py FAMILY SEED`` (a recording's seed, as in the
 ``seed`` column of ``results/bench_corpus_frames.csv``), ``--frames N``, ``--single-path``,
 ``--depths`` (then also the surface image the receiver took out), ``--preset`` (the frame, as
-``bench_corpus.py --preset``), ``--paths D,S,B`` (those of the paths D, S, B, SB, BS alone, the
-recording otherwise the same: which path makes a row's error or σ). Prints, per frame: the record's
+``bench_corpus.py --preset``), ``--paths D,S,B`` (those of the paths D, S, B, SB, BS alone, with the
+geometry, gains and Doppler of the full recording and its nominal SNR: which path makes a row's error or
+σ). Prints, per frame: the record's
 ``v_r_source``, SNR, range and v_r errors against the corpus's direct-path truth with their σ and
 error/σ, and the whole-frame fit's paths (delay after the first [µs], |gain| relative to it); then the
 true paths of the first frame (name, delay after the direct path [µs], closing speed [m/s], gain). A
@@ -31,8 +32,8 @@ def main(argv=None) -> int:
     ap.add_argument("--single-path", action="store_true", help="the same recording with its echoes removed")
     ap.add_argument("--depths", action="store_true", help="give the receiver the ends' depths")
     ap.add_argument("--preset", default="jmse2024", help="the beacon's frame (as bench_corpus.py --preset)")
-    ap.add_argument("--paths", help="comma-separated paths to keep, among D,S,B,SB,BS (D included), the "
-                                    "recording otherwise the same")
+    ap.add_argument("--paths", help="comma-separated paths to keep, among D,S,B,SB,BS (D included), with the "
+                                    "geometry, gains and Doppler of the full recording")
     args = ap.parse_args(argv)
     paths = None
     if args.paths is not None:

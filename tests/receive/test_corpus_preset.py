@@ -36,7 +36,7 @@ def test_the_corpus_keeps_the_paths_asked_for_and_the_rest_of_the_recording():
     _, _, _, some = recording("far", 31001, 1, paths=("D", "B"))
     assert [p[0] for p in some.truth[0]["paths"]] == ["D", "B"]
     by_name = {p[0]: p for p in full.truth[0]["paths"]}
-    for p in some.truth[0]["paths"]:  # the same geometry and gains: the other paths only left out
+    for p in some.truth[0]["paths"]:  # the same geometry, gains and Doppler: the other paths only left out
         assert p == by_name[p[0]]
     with pytest.raises(ValueError, match="include D"):
         recording("far", 31001, 1, paths=("S", "B"))
