@@ -69,11 +69,14 @@ def run_recording(family: str, seed: int, n_frames: int, echoes: bool = True, de
     from seamodem.receive import Emissions, Receiver, ReceiverSettings
 
     cfg, sc, t_emit, rec = recording(family, seed, n_frames, echoes, preset, paths)
-    known = dict(beacon_depth_m=float(-sc.beacon[2]), vehicle_depth_m=float(-sc.track["z"])) if depths else {}
-    if depths and depth_log and sc.track.get("climb_mps", 0.0):
-        times = np.arange(0.0, len(rec.samples) / cfg.sample_rate_hz + 0.1, 0.1)
-        known.pop("vehicle_depth_m")
-        known["vehicle_depth_log"] = (times, -receiver_position(sc, times)[:, 2])
+    known = {}
+    if depths:
+        known["beacon_depth_m"] = float(-sc.beacon[2])
+        if depth_log and sc.track.get("climb_mps", 0.0):
+            times = np.arange(0.0, len(rec.samples) / cfg.sample_rate_hz + 0.1, 0.1)
+            known["vehicle_depth_log"] = (times, -receiver_position(sc, times)[:, 2])
+        else:
+            known["vehicle_depth_m"] = float(-sc.track["z"])
     rx = Receiver(cfg, emissions=Emissions(times_s=t_emit), settings=ReceiverSettings(decode=True, **known),
                   payloads=rec.payloads)
     found = {r.frame_index: r for r in rx.run([rec.samples], fs=cfg.sample_rate_hz) if 0 <= r.frame_index < n_frames}

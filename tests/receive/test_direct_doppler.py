@@ -67,7 +67,7 @@ def _decisions_fit_record(v_fit, sigma_fit, v_bank, v_tone, *, snr_db=6.0, c_n0_
     tone = SimpleNamespace(c_n0_hz=10 ** (c_n0_dbhz / 10), spread_hz=0.0, amp_rate_hz=0.0,
                            amp_rate_terms=np.zeros((2, 2)))
     m = SimpleNamespace(v_tone_ml_mps=v_tone, tone=tone,
-                        pilot=SimpleNamespace(snr_db=snr_db, v_mps=v_bank), paths=SimpleNamespace(delays_s=one))
+                        pilot=SimpleNamespace(snr_db=snr_db, v_mps=v_bank, t_start_s=0.1), paths=SimpleNamespace(delays_s=one))
     # a lone path: the direct path has the whole SNR; Es/N0 = 10^0.6 · 1.4 = 5.6 expected, the fit's 1 (0.18 of it)
     return rx._doppler(m, object(), None, 0.0, 1.0, 1.0, snr_db)
 

@@ -224,18 +224,16 @@ def _frame_emissions(args, recording: str, sidecar, duration_s: float):
 
 
 def _depth_log(args):
-    """--vehicle-depth-log's (times, depths), read once; None without it."""
+    """--vehicle-depth-log's (times, depths); None without it."""
     path = getattr(args, "vehicle_depth_log", None)
     if path is None:
         return None
     if args.vehicle_depth is not None:
         raise SeamodemError("vehicle-depth-log: give --vehicle-depth or --vehicle-depth-log, not both")
-    if getattr(args, "_depth_log", None) is None:
-        from ..navigation.logs import read_depth
+    from ..navigation.logs import read_depth
 
-        log = read_depth(path, what="vehicle depth log")
-        args._depth_log = (tuple(log["t_s"]), tuple(log["depth_m"]))
-    return args._depth_log
+    log = read_depth(path, what="vehicle depth log")
+    return log["t_s"], log["depth_m"]
 
 
 def _vehicle_depth_given(args) -> bool:
@@ -244,10 +242,10 @@ def _vehicle_depth_given(args) -> bool:
 
 def _water_profile(args, profile, sidecar: dict | None):
     """The profile of --sound-speed-profile, else (with both depths given) the simulated recording's sidecar's."""
-    depths = (args.beacon_depth, True if _vehicle_depth_given(args) else None)
-    if profile is None and depths == (None, None):
+    beacon, vehicle = args.beacon_depth is not None, _vehicle_depth_given(args)
+    if profile is None and not (beacon or vehicle):
         return None
-    if None in depths:
+    if not (beacon and vehicle):
         raise SeamodemError("sound-speed-profile: needs --beacon-depth and --vehicle-depth (the ray joins the two)")
     if profile is None:
         traced = (((sidecar or {}).get("channel") or {}).get("model") or {}).get("sound_speed_profile")

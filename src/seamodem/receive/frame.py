@@ -1496,7 +1496,7 @@ class FrameMeasurer:
         """
         c = self.settings.sound_speed_mps
         v_tone = m.v_tone_ml_mps
-        image = self.merged_image(range_m, m.pilot.t_start_s) if self.images_modelled else None
+        image = self.merged_image(range_m, m.pilot.t_start_s)
         # impulses left by blanking reach the tone's band as the data band's (the same √excess as the bank's)
         sigma_tone = float(tone_velocity_crlb_mps(self.config, m.tone.c_n0_hz, sound_speed_mps=c)) * math.sqrt(excess)
         sigma_tone_noise = sigma_tone  # the two-carrier check's: lines and wander are what it measures
