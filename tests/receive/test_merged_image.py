@@ -174,6 +174,36 @@ def test_noise_alone_rarely_counts_and_a_turning_bend_still_does():
     assert pool.delay_s > 0
 
 
+def test_a_bound_once_counted_holds_over_the_standing_pools_frames_at_a_steady_range():
+    # a bend near the tests' thresholds (a merged image at 1 km without the depths) counts on some frames and
+    # not on their neighbours: with ``hold``, what was counted after each of the last FADE_POOL_FRAMES fits
+    # at a steady range still counts; a range beyond the steady share ends it
+    from seamodem.receive.frame import FADE_POOL_FRAMES, _CurvaturePool, steady_bend_range_share
+
+    rng = np.random.default_rng(13)
+    noise = 1e-20
+    share = steady_bend_range_share(CFG)
+    plain, held = _CurvaturePool(share), _CurvaturePool(share, hold=FADE_POOL_FRAMES)
+    ranges = [1000.0 + 2.0 * k for k in range(24)] + [1200.0 + 2.0 * k for k in range(6)]
+    bounds_plain, bounds_held = [], []
+    for k, r in enumerate(ranges):
+        # a fading bend 1.2 times the noise's root (its phase turning: the coherent mean does not add it)
+        bend = _noisy_bend(rng, 1.2 * np.sqrt(noise) * np.exp(2j * np.pi * k / 5), noise)
+        for pool, out in ((plain, bounds_plain), (held, bounds_held)):
+            pool.add_fit(_fit(bend, noise), 0, range_m=r)
+            out.append(pool.delay_s)
+    bounds_plain, bounds_held = np.array(bounds_plain), np.array(bounds_held)
+    for k in range(len(ranges)):
+        steady = [j for j in range(max(0, k - FADE_POOL_FRAMES + 1), k + 1)
+                  if abs(ranges[j] - ranges[k]) <= share * ranges[k]]
+        assert bounds_held[k] == pytest.approx(bounds_plain[steady].max(), rel=1e-12)
+    # the case it is for: frames the plain pool leaves at 0 next to frames it counted
+    lapsed = (bounds_plain[:24] == 0) & (bounds_held[:24] > 0)
+    assert lapsed.any() and (bounds_plain[:24] > 0).any(), bounds_plain
+    # after the jump to 1.2 km the frames before it no longer count
+    assert bounds_held[24] == bounds_plain[24]
+
+
 def test_waiting_for_later_frames_changes_only_the_sigmas():
     import dataclasses
 
