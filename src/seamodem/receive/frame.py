@@ -770,9 +770,8 @@ class _CurvaturePool(_FramePool):
         self._bends: collections.deque[tuple[complex, float, float]] = collections.deque(
             maxlen=CURVATURE_POOL_MAX_FRAMES)
         self._range_share = float(range_share)
-        # (the bound counted after each of the last ``hold`` fits [s], that fit's range [m])
-        self._counted: collections.deque[tuple[float, float]] = collections.deque(maxlen=max(int(hold), 1))
-        self._hold = int(hold) > 0
+        # (the bound counted after each of the last ``hold`` fits [s], that fit's range [m]; none kept at 0)
+        self._counted: collections.deque[tuple[float, float]] = collections.deque(maxlen=int(hold))
 
     def add_fit(self, wf: WholeFrameFit, first: int, image: MergedImage | None = None,
                 range_m: float = math.nan) -> None:
@@ -787,7 +786,7 @@ class _CurvaturePool(_FramePool):
         self.add(abs(bend) ** 2 - noise, noise)
         if cmath.isfinite(bend) and math.isfinite(noise) and noise > 0:
             self._bends.append((bend, noise, float(range_m)))
-        if self._hold:
+        if self._counted.maxlen:
             self._counted.append((self._bound_s(), float(range_m)))
 
     def coherent_s4(self) -> float:
@@ -813,12 +812,10 @@ class _CurvaturePool(_FramePool):
     @property
     def delay_s(self) -> float:
         now = self._bound_s()
-        if not self._counted:
+        newest = self._counted[-1][1] if self._counted else math.nan
+        if not math.isfinite(newest):
             return now
-        newest = self._counted[-1][1]
-        held = [d for d, r in self._counted
-                if math.isfinite(newest) and abs(r - newest) <= self._range_share * newest]
-        return max([now, *held])
+        return max([now, *(d for d, r in self._counted if abs(r - newest) <= self._range_share * newest)])
 
 
 #: frames further apart than this [s] are not compared for the slow fading (``FrameMeasurer._frame_to_frame``)
