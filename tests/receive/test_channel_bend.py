@@ -113,3 +113,71 @@ def test_the_bend_read_is_the_sub_bands_not_the_curvature_at_the_carrier():
     measured = complex(fit.curvature_s2[0])
     assert abs(measured - read) < 0.1 * abs(read)
     assert abs(measured - at_carrier) > 0.3 * abs(at_carrier)
+
+
+def _fading_echo_fit(seed, echoes, fitted, snr_db, **kw):
+    """A frame through the direct path and ``echoes`` (lag [s], gain, fading rate [Hz] or 0), each fading one's
+    gain 0.6 + 0.8 e^{j2π(rate·t + φ)} (its modulus 0.2–1.4 over a cycle); fitted with paths at ``fitted``."""
+    from scipy.signal import hilbert
+
+    rng = np.random.default_rng(seed)
+    ta = 0.1 + rng.uniform(0, 0.01)
+    n = int((ta + CFG.frame_duration_s + 0.05) * FS)
+    t = np.arange(n) / FS
+    x = received_frame(FRAME, t, t_arrival_s=ta, v_mps=V)
+    for lag, gain, rate in echoes:
+        e = received_frame(FRAME, t, t_arrival_s=ta + lag, v_mps=V, gain=gain)
+        if rate:
+            e = np.real(hilbert(e) * (0.6 + 0.8 * np.exp(2j * np.pi * (rate * t + rng.uniform()))))
+        x = x + e
+    x += awgn_sigma(CFG, snr_db) * rng.standard_normal(n)
+    fe = FrontEnd(PLAN)
+    bb = np.concatenate([fe.push(x)[0], fe.flush()[0]])
+    fit = fit_whole_frame(bb, PLAN.fs_data, 0.0, config=CFG, symbols=FRAME.symbols,
+                          reference=np.ones(len(FRAME.symbols), bool), delays_s=[ta + d for d in fitted],
+                          v_mps=V, sound_speed_mps=C, direct_s=ta, **kw)
+    i = int(np.argmin(np.abs(fit.delays_s - ta)))
+    return abs(complex(fit.curvature_s2[i])) ** 2 / float(fit.curvature_noise_s4[i]), float(fit.delays_s[i] - ta)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_an_echo_fading_within_the_frame_leaves_the_direct_paths_bend_at_its_noise(seed):
+    # an echo 0.9 at 500 µs (4.5/B: resolved over the band, not in a B/4 sub-band) whose gain turns at 1.5 Hz;
+    # the fit models it. Taken out at one gain, its fading stays in the residual and bends the direct path's
+    # sub-bands; segment by segment, it does not
+    # (echo_misfit off: the fading's residual near the echo would be taken out as its misfit too)
+    echo = ((500e-6, 0.9, 1.5),)
+    bent, arrival = _fading_echo_fit(seed, echo, [0.0, 500e-6], 15.0, segment_gains=False, echo_misfit=None)
+    flat, arrival_2 = _fading_echo_fit(seed, echo, [0.0, 500e-6], 15.0, echo_misfit=None)
+    assert bent > 9 and flat < 9  # |c|²/noise: exponential of mean 1 on a channel without curvature
+    # the arrival is the same (and right: the echo is resolved over the whole band), the bend was spurious
+    assert arrival == arrival_2 and abs(arrival) * C < 1.5e-3
+
+
+def test_a_cluster_fitted_as_one_echo_leaves_the_direct_paths_bend_at_its_noise():
+    # two echoes 80 µs apart (0.7/B), −0.8 and 0.6, which the fit models as one path: its misfit ripples the
+    # direct path's sub-bands; taken out within 2/B of the echo's lag (echo_misfit), the bend is noise's
+    # (a near-cancelling pair, 0.8 and −0.7 90 µs apart, is only partly: 22–41 → 4–12 times the noise)
+    cluster = ((480e-6, -0.8, 0.0), (560e-6, 0.6, 0.0))
+    misfit = [_fading_echo_fit(s, cluster, [0.0, 500e-6], 15.0, echo_misfit=None)[0] for s in range(3)]
+    cleaned = [_fading_echo_fit(s, cluster, [0.0, 500e-6], 15.0, echo_misfit="out")[0] for s in range(3)]
+    assert np.mean(misfit) > 9 and max(cleaned) < 9
+    # the receiver's default reads both and keeps the larger (without the depths, a merged image's bend may
+    # be the one the misfit masked)
+    larger = [_fading_echo_fit(s, cluster, [0.0, 500e-6], 15.0)[0] for s in range(3)]
+    assert np.allclose(larger, np.maximum(misfit, cleaned))
+
+
+def test_an_echo_the_pilot_missed_is_recalled_from_the_last_decoded_frame():
+    from seamodem.receive.frame import RECALL_MIN_GAIN, with_recalled_echoes
+
+    one_b = 1 / CFG.bandwidth_hz
+    first = 0.2
+    pilot = np.array([first, first + 322e-6, first + 1.2e-3])
+    # the last decoded frame: 380 µs (within 1/B of the pilot's 322), 495 (beyond), a weak one, and one
+    # nearer the direct path than 1.5/B (a merged echo's misfit, not a path)
+    lags = np.array([380e-6, 495e-6, 2.0e-3, 1.2 * one_b])
+    gains = np.array([0.4, 0.96, RECALL_MIN_GAIN / 2, 0.5])
+    out = with_recalled_echoes(pilot, first, (lags, gains), CFG)
+    assert np.allclose(out, np.sort(np.append(pilot, first + 495e-6)))
+    assert np.array_equal(with_recalled_echoes(pilot, first, None, CFG), pilot)
