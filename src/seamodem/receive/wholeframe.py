@@ -835,8 +835,9 @@ def fit_whole_frame(
         Look this far [s] before the direct path for a component the fit left in its residual
         (``earlier_path``; default 0: not looked for).
     segment_gains : bool
-        Read the direct path's bend with the other paths taken out at their gains segment by segment
-        (default) rather than at their one fitted gain. An echo that fades within the frame leaves its
+        Read the direct path's bend with the other paths 1.5/B or more from every path taken out at their
+        gains segment by segment (default) rather than at their one fitted gain (a nearer one's segment sums
+        are its pair's: split clusters' bends 13–29 times their noise). An echo that fades within the frame leaves its
         gain's change in the residual, a copy of the frame Δ later that a sub-band (B/4 wide) does not
         resolve from the direct path: an echo 0.9 at 500 µs, its gain turning at 1.5 Hz, bent the direct
         path 20–32 times its noise with one gain, 0.1–0.4 segment by segment, its arrival unchanged
