@@ -123,7 +123,9 @@ def test_frame_demo_writes_what_it_wrote_before_the_waveform_option(tmp_path):
     ≤ 0.30 relative, sigma_v_r_mps ≤ 9e-4; the tracks equal to 1e-9), and in session 13 for the amplitude
     rate's parabola counted beyond 3σ and the rate pool's threshold (sigma_v_r_mps ≤ 9.3e-4 relative,
     sigma_range_m ≤ 1e-5; the tracks equal to 1e-9), and in session 15 for the paths' joint delay σ
-    (sigma_range_m ≤ 9e-5 relative; the tracks equal to 1e-9). Rewrite them
+    (sigma_range_m ≤ 9e-5 relative; the tracks equal to 1e-9), and in session 27 for the echo recalled from
+    the last decoded frame (one frame fitted with one path more: range 0.03 mm, v_r 0.04 mm/s, σ's ≤ 3e-3
+    relative; the tracks within 0.3 mm). Rewrite them
     (``seamodem demo --duration 6 --no-plots -q -o DIR``) only for a change that is meant to alter them."""
     out = tmp_path / "demo"
     assert main(["demo", "--duration", "6", "--no-plots", "-q", "-o", str(out)]) == 0
