@@ -1735,7 +1735,8 @@ class FrameMeasurer:
                 # a recalled echo that converged onto a path the pilot's fit had (the echo moved since the
                 # earlier frame): two paths for one, which bend the direct path's sub-bands as one missed would
                 delays0 = np.asarray(paths.delays_s, float)
-                wf, first = fit(data, trusted, delays0, reach=cfg.n_pilot * cfg.symbol_period_s if dec.crc_ok else 0.0)
+                wf, first = fit(data, trusted, delays0,
+                                reach=cfg.n_pilot * cfg.symbol_period_s if dec.crc_ok else 0.0)
         except ValueError:  # too few trusted symbols
             return None
         pilot_path = first

@@ -609,7 +609,7 @@ def unmodelled_paths(resid: np.ndarray, template: np.ndarray, fs: float, config:
 
     ``near_lags_s``: when given, lags [s] after the template of the paths the fit models: only the components
     found within :data:`_NEAR_ECHO_B`/B of one of them are returned (their misfit), the others are taken out
-    of the correlation only (``fit_whole_frame(echo_misfit=True)``).
+    of the correlation only (``fit_whole_frame(echo_misfit=…)``).
 
     ``known_lags_s``: lags [s] relative to the template of paths merged with it that the receiver models (a
     surface image from the ends' depths: the direct path at −bias, the image at δ − bias). A fit of one
@@ -836,12 +836,12 @@ def fit_whole_frame(
         (``earlier_path``; default 0: not looked for).
     segment_gains : bool
         Read the direct path's bend with the other paths 1.5/B or more from every path taken out at their
-        gains segment by segment (default) rather than at their one fitted gain (a nearer one's segment sums
-        are its pair's: split clusters' bends 13–29 times their noise). An echo that fades within the frame leaves its
-        gain's change in the residual, a copy of the frame Δ later that a sub-band (B/4 wide) does not
-        resolve from the direct path: an echo 0.9 at 500 µs, its gain turning at 1.5 Hz, bent the direct
-        path 20–32 times its noise with one gain, 0.1–0.4 segment by segment, its arrival unchanged
-        (tests/receive/test_channel_bend.py).
+        gains segment by segment (default) rather than at their one fitted gain (a nearer one's segment
+        sums are its pair's: split clusters' bends 13–29 times their noise). An echo that fades within the
+        frame leaves its gain's change in the residual, a copy of the frame Δ later that a sub-band (B/4
+        wide) does not resolve from the direct path: an echo 0.9 at 500 µs, its gain turning at 1.5 Hz,
+        bent the direct path 20–32 times its noise with one gain, 0.1–0.4 segment by segment, its arrival
+        unchanged (tests/receive/test_channel_bend.py).
     echo_misfit : {"larger", "out", None}
         Without ``clean``: ``"out"`` takes out of the direct path's sub-bands the components the residual
         holds within 2/B of a fitted echo (:func:`unmodelled_paths` restricted to them), the misfit of a
@@ -854,6 +854,8 @@ def fit_whole_frame(
         to 7.1σ → within 1σ) and took away the bound that covered the image on four others (errors 3–15
         mm, σ 15–21 → 0.8–5 mm, up to 7.7σ). ``None``: neither (before session 27).
     """
+    if echo_misfit not in ("larger", "out", None):
+        raise ValueError(f"echo_misfit must be 'larger', 'out' or None, got {echo_misfit!r}")
     c = sound_speed_mps
     f0 = config.carrier_hz
     delays = np.sort(np.asarray(delays_s, dtype=float))
