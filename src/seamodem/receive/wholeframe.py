@@ -851,8 +851,8 @@ def fit_whole_frame(
         without the misfit and keeps the larger: without the depths, a merged surface image's bend and a
         cluster's misfit are not told apart, and either may mask the other. On the corpus's far family
         the misfit taken out unmasked an image's bend on one recording (fresh seed 5171282, −0.5 dB: up
-        to 7.1σ → within 1σ) and took away the bound that covered the image on four others (errors 3–15
-        mm, σ 15–21 → 0.8–5 mm, up to 7.7σ). ``None``: neither (before session 27).
+        to 7.1σ → within 1σ) and took away the bound that covered the image on three others (errors 4–15
+        mm, σ 15–32 → 0.9–4.5 mm, up to 7.3σ). ``None``: neither (before session 27).
     """
     if echo_misfit not in ("larger", "out", None):
         raise ValueError(f"echo_misfit must be 'larger', 'out' or None, got {echo_misfit!r}")
