@@ -33,7 +33,7 @@ import numpy as np
 from ..config import FrameConfig
 from ..errors import ConfigError
 from ..transmit.coding import encode_info, interleaver_permutation, parse_info_block, pn9_sequence
-from ..transmit.modulation import bits_to_symbols, constellation
+from ..transmit.modulation import bits_to_symbols, constellation, nearest_labels
 from .bcjr import bcjr_decode
 from .demap import soft_demap
 from .equalizer import DfeResult, DfeSettings, dfe_equalize
@@ -128,8 +128,7 @@ def symbol_noise_var(y: np.ndarray, modulation: str) -> np.ndarray:
     y = np.asarray(y, dtype=complex)
     if y.size == 0:
         return np.zeros(0)
-    pts = constellation(modulation)
-    err2 = np.min(np.abs(y[:, None] - pts[None, :]) ** 2, axis=1)
+    err2 = np.abs(y - constellation(modulation)[nearest_labels(y, modulation)]) ** 2
     return np.maximum(float(np.median(err2)) / math.log(2.0), err2 / OUTLIER_SCALE)
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..config import FrameConfig
 from ..transmit.frame import build_frame
-from ..transmit.modulation import constellation
+from ..transmit.modulation import constellation, nearest_labels
 from ..transmit.pilot import pilot_symbols
 from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
 from .demodulate import FrameDecode, demodulate, payload_fields
@@ -563,7 +563,7 @@ def confident_decisions(soft: np.ndarray, modulation: str) -> tuple[np.ndarray, 
     ([1.0, -1.0, 1.0, 1.0], [True, True, False, False])
     """
     points = constellation(modulation)
-    data = points[np.argmin(np.abs(soft[:, None] - points[None, :]), axis=1)]
+    data = points[nearest_labels(soft, modulation)]
     half_gap = 0.5 * np.min(np.abs(points[1:] - points[0]))
     return data, np.abs(soft - data) < 0.5 * half_gap
 
@@ -1728,15 +1728,15 @@ class FrameMeasurer:
                                  earlier_reach_s=reach)
             return wf, int(np.argmin(np.abs(wf.delays_s - direct)))
 
+        # a decoded frame's residual is searched for a direct path the pilot's fit missed
+        reach = cfg.n_pilot * cfg.symbol_period_s if dec.crc_ok else 0.0
         try:
-            # a decoded frame's residual is searched for a direct path the pilot's fit missed
-            wf, first = fit(data, trusted, reach=cfg.n_pilot * cfg.symbol_period_s if dec.crc_ok else 0.0)
+            wf, first = fit(data, trusted, reach=reach)
             if len(delays0) > len(paths.delays_s) and np.min(np.diff(wf.delays_s)) * cfg.bandwidth_hz < 0.5:
                 # a recalled echo that converged onto a path the pilot's fit had (the echo moved since the
                 # earlier frame): two paths for one, which bend the direct path's sub-bands as one missed would
                 delays0 = np.asarray(paths.delays_s, float)
-                wf, first = fit(data, trusted, delays0,
-                                reach=cfg.n_pilot * cfg.symbol_period_s if dec.crc_ok else 0.0)
+                wf, first = fit(data, trusted, reach=reach)
         except ValueError:  # too few trusted symbols
             return None
         pilot_path = first
@@ -1755,8 +1755,7 @@ class FrameMeasurer:
                 if q is not None:
                     # a path the pilot's fit found before the one it took, which the whole frame shows: the direct
                     # path (fitted again with its channel's shape read)
-                    retake(*fit(data, trusted, delays0, float(wf.delays_s[q]),
-                                reach=cfg.n_pilot * cfg.symbol_period_s))
+                    retake(*fit(data, trusted, direct=float(wf.delays_s[q]), reach=reach))
                 elif lag is not None:
                     t_direct = float(wf.delays_s[first]) + lag
                     wf2, first2 = fit(data, trusted, np.concatenate([[t_direct], delays0]), t_direct)

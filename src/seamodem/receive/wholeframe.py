@@ -1056,17 +1056,21 @@ def fit_whole_frame(
     strongest = float(np.max(np.abs(amps)))
     if echo_bends is None:
         echo_bends = split > 0
+    # each path 1.5/B or more from every other: what its gain segment by segment adds to its one fitted gain's
+    # model (a nearer one keeps its one gain: its segments' sums are the pair's)
+    fades = {}
+    if n_paths > 1 and segment_gains:
+        for q in range(n_paths):
+            if np.all(np.abs(np.delete(delays, q) - delays[q]) * config.bandwidth_hz >= _MISSED_AFTER_B):
+                fades[q] = models[q] * (1.0 - _segment_gain(last_phase[q], counts, amps[q], delays[q] + half,
+                                                            seg.t_s))
     for p in range(n_paths):
         if p != direct and not (echo_bends and abs(amps[p]) >= _BEND_MIN_FRACTION * strongest):
             curv[p], curv_noise[p] = complex(math.nan, math.nan), math.nan
             continue
         r_p = seg_bb - (total - models[p]) if n_paths > 1 else seg_bb
-        if n_paths > 1 and segment_gains:
-            # (a path within 1.5/B of another is taken out at its one gain: its segments' sums are the pair's)
-            apart = [q for q in range(n_paths) if q != p and np.all(
-                np.abs(np.delete(delays, q) - delays[q]) * config.bandwidth_hz >= _MISSED_AFTER_B)]
-            r_p = r_p + sum(models[q] * (1.0 - _segment_gain(last_phase[q], counts, amps[q], delays[q] + half,
-                                                             seg.t_s)) for q in apart)
+        if fades:
+            r_p = r_p + sum(f for q, f in fades.items() if q != p)
         # (the residual of the paths as taken out: segment by segment, an echo's fading is not in it)
         resid_p = r_p - models[p] if n_paths > 1 else resid
         if clean and p == direct and abs(amps[p]) > 0:

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..config import MODULATIONS
 
-__all__ = ["constellation", "bits_to_symbols", "symbols_to_bits"]
+__all__ = ["constellation", "bits_to_symbols", "symbols_to_bits", "nearest_labels"]
 
 
 def _gray(n: np.ndarray) -> np.ndarray:
@@ -72,6 +72,17 @@ def bits_to_symbols(bits: np.ndarray, modulation: str) -> np.ndarray:
     return constellation(modulation)[labels]
 
 
+def nearest_labels(symbols: np.ndarray, modulation: str) -> np.ndarray:
+    """The label of the constellation point nearest each symbol (hard decisions): ``constellation(modulation)[
+    nearest_labels(y, modulation)]`` are the decided points.
+
+    >>> nearest_labels(np.array([0.9, -1.2, 0.3j]), "bpsk").tolist()
+    [0, 1, 0]
+    """
+    points = constellation(modulation)
+    return np.argmin(np.abs(np.asarray(symbols)[:, None] - points[None, :]), axis=1)
+
+
 def symbols_to_bits(symbols: np.ndarray, modulation: str) -> np.ndarray:
     """Hard decision: nearest constellation point's bit label (MSB first).
 
@@ -88,6 +99,5 @@ def symbols_to_bits(symbols: np.ndarray, modulation: str) -> np.ndarray:
         Bits.
     """
     bps = MODULATIONS[modulation]
-    points = constellation(modulation)
-    labels = np.argmin(np.abs(np.asarray(symbols)[:, None] - points[None, :]), axis=1)
+    labels = nearest_labels(symbols, modulation)
     return ((labels[:, None] >> np.arange(bps - 1, -1, -1)) & 1).astype(np.uint8).ravel()
