@@ -82,6 +82,10 @@ def add_parser(sub) -> None:
                         "image rides, in its σ's")
     g.add_argument("--wave-period", type=float, default=3.0, metavar="S",
                    help="with the depths: the waves' shortest period [s]")
+    g.add_argument("--no-echo-geometry", dest="echo_geometry", action="store_false",
+                   help="without the depths, do not take them from the echoes the decoded frames resolve (the "
+                        "bottom and surface-bottom images of a flat waveguide: the merged surface image's bias then "
+                        "stays in the range, covered only as far as the channel's bend shows it)")
     p.add_argument("--clock-offset", type=float, default=0.0, metavar="S", help="receiver minus beacon clock [s]")
     p.add_argument(
         "--turnaround",
@@ -293,6 +297,7 @@ def _settings(args, sidecar: dict | None, profile=None):
         vehicle_depth_log=log,
         wave_amplitude_m=getattr(args, "wave_amplitude", 0.5),
         wave_period_s=getattr(args, "wave_period", 3.0),
+        echo_geometry=getattr(args, "echo_geometry", True),
         **({} if getattr(args, "lookahead", None) is None else {"lookahead_frames": args.lookahead}),
     ), origin
 
@@ -474,8 +479,10 @@ def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> 
     At range R a surface image arrives δ = 2·z_b·z_v/(R·c) after the direct path; below the resolution
     1/B (z_b·z_v < R·c/(2B)) it merges with it and makes the range about 0.45·δ·c = 0.9·z_b·z_v/R long
     (docs/receiver.md), unseen at the SNRs where the channel's curvature stays within its noise. With
-    the depths it is taken out (``--beacon-depth``, ``--vehicle-depth``); without them the note says for
-    which depth products that bias exceeds 3 of the median σ, when there are any.
+    the depths it is taken out (``--beacon-depth``, ``--vehicle-depth``), and so it is where the decoded
+    frames' echoes give them (``ReceiverSettings.echo_geometry``: a flat waveguide's bottom and
+    surface–bottom images resolved); otherwise the note says for which depth products that bias exceeds 3
+    of the median σ, when there are any.
 
     >>> from seamodem import get_preset
     >>> print(lloyd_mirror_note([900.0], [0.001], get_preset("jmse2024"), sound_speed_mps=1500.0))
@@ -483,7 +490,7 @@ def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> 
     note: ranges measured without the ends' depths (--beacon-depth, --vehicle-depth or --vehicle-depth-log): at
     the median range of 900 m, a surface image merged with the direct path (Lloyd's mirror) makes the range about 0.9·z_b·z_v/R
     long, beyond 3 of the median σ (1 mm) for depths whose product is 3-75 m² (both ends 1.7-8.7 m
-    deep), and the σ does not include it (docs/receiver.md)
+    deep), and the σ does not include it unless the decoded frames' echoes gave the depths (docs/receiver.md)
     >>> lloyd_mirror_note([15.0], [0.001], get_preset("jmse2024"), sound_speed_mps=1500.0)
     ''
     """
@@ -498,7 +505,7 @@ def lloyd_mirror_note(ranges_m, sigmas_m, config, *, sound_speed_mps: float) -> 
             f"of {r:.3g} m, a surface image merged with the direct path (Lloyd's mirror) makes the range about "
             f"0.9·z_b·z_v/R long, beyond 3 of the median σ ({s * 1e3:.2g} mm) for depths whose product is "
             f"{low:.2g}-{high:.2g} m² (both ends {math.sqrt(low):.2g}-{math.sqrt(high):.2g} m deep), and the σ "
-            "does not include it (docs/receiver.md)")
+            "does not include it unless the decoded frames' echoes gave the depths (docs/receiver.md)")
 
 
 def _along_the_ray(records, inputs: _Inputs, args):

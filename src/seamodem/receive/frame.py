@@ -34,6 +34,7 @@ from ..transmit.pilot import pilot_symbols
 from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
 from .demodulate import FrameDecode, demodulate, payload_fields
 from .detect import Detection
+from .echo_geometry import ImageDepths, pooled_depths
 from .frontend import FrontEndPlan, plan_front_end
 from .impulse import ImpulseBlanker
 from .measure import FrameMeasurement, frame_span_s, impulse_excess, measure_frame
@@ -348,7 +349,8 @@ class MergedImage(NamedTuple):
 
 def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: float, *, config: FrameConfig,
                         sound_speed_mps: float, wave_amplitude_m: float = WAVE_AMPLITUDE_M,
-                        wave_period_s: float = WAVE_PERIOD_S) -> MergedImage:
+                        wave_period_s: float = WAVE_PERIOD_S, depth_sigma_m: float = DEPTH_SIGMA_M,
+                        delay_sigma_s: float = 0.0) -> MergedImage:
     """The bias of the direct path's arrival that a merged surface image puts on it, its σ, and the bend
     it gives the channel [s, s, s², s⁴].
 
@@ -360,7 +362,8 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     number of cycles, where the two paths cancel). The bias is that peak's mean over what is not known:
     ρ over :data:`SURFACE_REFLECTION`, and the image's delay (and with it its phase) over the waves'
     ±2·a·sin θ of path (a = ``wave_amplitude_m``, θ the grazing angle) and over two σ of the depths'
-    error (:data:`DEPTH_SIGMA_M`); its σ is the peaks' spread over them. The channel's curvature it makes,
+    error (``depth_sigma_m``, default :data:`DEPTH_SIGMA_M`) and of δ's own (``delay_sigma_s``, depths
+    inferred from the echoes: :mod:`.echo_geometry`); its σ is the peaks' spread over them. The channel's curvature it makes,
     d²ln H/df² = −(2πδ)²·w(1 − w), is the mean over the same (with its variance): the share of a measured
     bend (``WholeFrameFit.curvature_s2``) the image explains. All 0 when the image is resolved or the
     geometry is not given. The waves' amplitude and shortest period (``wave_period_s``) are
@@ -387,9 +390,9 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     # phase 2π·f₀·δ moves with it
     sin_grazing = (beacon_depth_m + vehicle_depth_m) / max(range_m, 1e-9)
     waves = 2 * wave_amplitude_m * sin_grazing / c
-    depths = 2 * delta * DEPTH_SIGMA_M * math.hypot(1 / max(beacon_depth_m, DEPTH_SIGMA_M),
-                                                    1 / max(vehicle_depth_m, DEPTH_SIGMA_M))
-    deltas = np.maximum(delta + (waves + depths) * np.linspace(-1.0, 1.0, 13), 0.0)
+    depths = 2 * delta * depth_sigma_m * math.hypot(1 / max(beacon_depth_m, depth_sigma_m),
+                                                    1 / max(vehicle_depth_m, depth_sigma_m))
+    deltas = np.maximum(delta + (waves + depths + 2 * delay_sigma_s) * np.linspace(-1.0, 1.0, 13), 0.0)
     rho = np.linspace(*SURFACE_REFLECTION, 3)
     z = -(rho[:, None] * np.exp(-2j * np.pi * f0 * deltas[None, :])).ravel()
     lags = np.broadcast_to(deltas[None, :], (len(rho), len(deltas))).ravel()
@@ -416,9 +419,15 @@ def merged_image_bias_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: 
     mean = complex(np.mean(curvature))
     z0 = -float(np.mean(SURFACE_REFLECTION)) * cmath.exp(-2j * math.pi * f0 * delta)
     w0 = z0 / (1 + z0)
+    re_w, im_w = abs(w0.real), abs(w0.imag)
+    if delay_sigma_s > 0 and f0 * float(np.ptp(deltas)) > 0.25:
+        # the image's phase not known within a quarter of a carrier cycle (depths from the echoes): |Re w| and
+        # |Im w| as for a phase unknown (bend_image's), not at δ's middle (a far recording at 14.5 dB, δ from
+        # the echoes: v_r 6.6σ off at the middle's |Re w / Im w|, 4.3σ with the bend's)
+        re_w, im_w = _BEND_RE_W, _BEND_RE_W / _BEND_RE_IM
     return MergedImage(float(np.mean(peaks)), float(np.std(peaks)), mean,
                        float(np.mean(np.abs(curvature - mean) ** 2)),
-                       re_w=abs(w0.real), im_w=abs(w0.imag),
+                       re_w=re_w, im_w=im_w,
                        wave_doppler_mps=wave_doppler_mps(sin_grazing, wave_amplitude_m, wave_period_s),
                        delay_s=delta)
 
@@ -1243,6 +1252,12 @@ class FrameMeasurer:
         # misplace an echo those frames found
         self._decoded_echoes: collections.deque[tuple[np.ndarray, np.ndarray]] = collections.deque(
             maxlen=_ECHO_POOL_FRAMES)
+        # the same with each echo's Doppler less the first path's, its σ and the lag's σ: the ends' depths
+        # without them (echo_image)
+        self._geometry_echoes: collections.deque[tuple[np.ndarray, ...]] = collections.deque(
+            maxlen=_ECHO_POOL_FRAMES)
+        self._geometry_count = 0  # echoes appended so far (the key of echo_image's last answer)
+        self._echo_image_cache: tuple | None = None
         # the pilot's arrival against the whole frame's in the last decoded frames: its squared gap less the
         # two σ's (unbiased, not clipped) [s²]: how far this channel moves the pilot's arrival beyond what
         # its σ holds, for a frame whose range is the pilot's arrival (_record)
@@ -1495,11 +1510,40 @@ class FrameMeasurer:
         (:func:`merged_image_bias_s`); None without one."""
         s = self.settings
         if not self.images_modelled:
-            return None
+            return self.echo_image(range_m)
         image = merged_image_bias_s(range_m, s.beacon_depth_m, s.vehicle_depth_at(t_s), config=self.config,
                                     sound_speed_mps=s.sound_speed_mps, wave_amplitude_m=s.wave_amplitude_m,
                                     wave_period_s=s.wave_period_s)
         return image if image.delay_s > 0 else None
+
+    def echo_image(self, range_m: float) -> MergedImage | None:
+        """Without the ends' depths (one-way, ``ReceiverSettings.echo_geometry``): the merged surface image
+        whose geometry the last decoded frames' echoes give (:func:`~.echo_geometry.pooled_depths`), as
+        :func:`merged_image_bias_s` with those depths and their σ; None when they do not give one."""
+        s = self.settings
+        if s.turnaround_s is not None or not s.echo_geometry or not self._geometry_echoes:
+            return None
+        if not (math.isfinite(range_m) and range_m > 0):
+            return None
+        c = s.sound_speed_mps
+
+        def image_at(g: ImageDepths) -> MergedImage:
+            return merged_image_bias_s(range_m, g.z1_m, g.z2_m, config=self.config, sound_speed_mps=c,
+                                       wave_amplitude_m=s.wave_amplitude_m, wave_period_s=s.wave_period_s,
+                                       depth_sigma_m=max(g.sigma_m, DEPTH_SIGMA_M), delay_sigma_s=g.delay_sigma_s)
+
+        key = (self._geometry_count, round(range_m, 2))
+        if self._echo_image_cache is not None and self._echo_image_cache[0] == key:
+            return self._echo_image_cache[1]
+        # the fit's first path is the merged pair, about Re(w)·δ late (the median of |Re w| over the image's
+        # phase): added back to the lags before the depths are solved for
+        found = pooled_depths(self._geometry_echoes, range_m, config=self.config, sound_speed_mps=c,
+                              lead_s=lambda g: _BEND_RE_W * merged_image_delay_s(
+                                  range_m, g.z1_m, g.z2_m, config=self.config, sound_speed_mps=c))
+        image = image_at(found) if found is not None else None
+        image = image if image is not None and image.delay_s > 0 else None
+        self._echo_image_cache = (key, image)
+        return image
 
     def doppler_image(self, range_m: float, t_s: float = math.nan) -> MergedImage | None:
         """The merged surface image whose Doppler term the whole-frame v_r's σ takes at ``range_m``: with the
@@ -1510,6 +1554,9 @@ class FrameMeasurer:
             return self.merged_image(range_m, t_s)
         if s.turnaround_s is not None:
             return None
+        image = self.echo_image(range_m)
+        if image is not None:
+            return image
         return bend_image(self.pooled_merge_delay_s, range_m, config=self.config, sound_speed_mps=s.sound_speed_mps,
                           wave_amplitude_m=s.wave_amplitude_m, wave_period_s=s.wave_period_s)
 
@@ -1572,6 +1619,11 @@ class FrameMeasurer:
             echoes = fit_echoes(fit.fit, fit.first)
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
+                others = np.arange(len(fit.fit.delays_s)) != fit.first
+                self._geometry_count += 1
+                self._geometry_echoes.append(echoes + (
+                    np.asarray(fit.fit.v_mps)[others] - float(fit.fit.v_mps[fit.first]),
+                    np.asarray(fit.fit.sigma_v_mps)[others], np.asarray(fit.fit.sigma_delay_s)[others]))
         pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
@@ -1642,7 +1694,7 @@ class FrameMeasurer:
             sigma = math.hypot(sigma, sigma_v_un)
             # a merged surface image's Doppler: with the depths, the image's; without them, the one a bend
             # pooled over recent frames shows (this frame's in the pool)
-            doppler_image = image if self.images_modelled else self.doppler_image(range_m)
+            doppler_image = image if image is not None or self.images_modelled else self.doppler_image(range_m)
             if doppler_image is not None:
                 sigma = math.hypot(sigma, image_doppler_sigma_mps(doppler_image, max(own_rate, pooled_rate),
                                                                   self.config, sound_speed_mps=c))
@@ -1671,7 +1723,7 @@ class FrameMeasurer:
                         fade_rates_hz=(own_rate, max(own_rate, pooled_rate), doppler_image)), \
                 _FitTiming(float(wf.delays_s[first]), sigma_tau_fit, shape,
                            direct_path_kappa(wf.delays_s, wf.amplitudes, first, self.config, v_mps=wf.v_mps,
-                                             sound_speed_mps=c) if self.images_modelled else 1.0,
+                                             sound_speed_mps=c) if image is not None else 1.0,
                            float(wf.delays_s[pilot_path] - wf.delays_s[first]), near_gap)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)

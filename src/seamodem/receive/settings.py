@@ -94,7 +94,8 @@ class ReceiverSettings:
         channel bend it makes is not counted again. Where another
         fitted path couples to the direct one, the delay is the arrival's σ
         (:func:`~seamodem.receive.frame.merged_image_delay_s`). Without the
-        depths the σ cannot cover that bias (docs/receiver.md).
+        depths the σ cannot cover that bias (docs/receiver.md), unless the
+        echoes give them (``echo_geometry``).
     vehicle_depth_log : tuple of two sequences, optional
         The vehicle's depth over the recording, in place of ``vehicle_depth_m``
         for a vehicle that changes depth: (times [s] on the recording's clock,
@@ -109,6 +110,14 @@ class ReceiverSettings:
         move the image's path, and with it its bias's spread and the Doppler
         it gives v_r where the amplitude cannot show it (default 0.5 m at
         3 s, a wind sea of 1 m; a calm sea's smaller values give smaller σ's).
+    echo_geometry : bool
+        Without the ends' depths (one-way): take them from the echoes the
+        decoded frames' whole-frame fits resolve, where their lags form a
+        flat waveguide's first images (the bottom and the two surface–bottom
+        images, :mod:`~seamodem.receive.echo_geometry`); the surface image
+        they then place below 1/B is taken out of the arrival as with the
+        depths given. False: a merged image only counts through the channel
+        bend it shows (as before session 28).
     lookahead_frames : int
         Frames measured after a record before it is given out: its range σ
         then also covers the channel bend that those later frames show
@@ -145,6 +154,7 @@ class ReceiverSettings:
     wave_amplitude_m: float = 0.5
     wave_period_s: float = 3.0
     lookahead_frames: int = 5
+    echo_geometry: bool = True
 
     def __post_init__(self):
         _positive("sound_speed", self.sound_speed_mps)
