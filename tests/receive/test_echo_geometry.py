@@ -66,6 +66,13 @@ def test_echo_patterns_of_other_channels_give_no_depths():
     steep = exact_lags(8.0, 10.0, 20.0, 12.0)
     assert depths_from_echoes([steep["S"], steep["B"], steep["SB"], steep["BS"]], [0.9, 0.5, 0.45, 0.45], 12.0,
                               **kw) is None
+    # the waveguide's mirror image: both ends near the bottom (15 m of water, 3 and 4 m above it), the bottom
+    # image merged, the surface image first and the surface–bottom pair after it: the same lags, but the
+    # pair weaker than the first echo by the bottom's loss
+    mirror = exact_lags(12.0, 11.0, 15.0, 800.0)
+    lags_b = exact_lags(3.0, 4.0, 15.0, 800.0)
+    assert mirror["S"] == pytest.approx(lags_b["B"], rel=1e-3)
+    assert depths_from_echoes([mirror["S"], mirror["SB"], mirror["BS"]], [0.9, 0.4, 0.4], 800.0, **kw) is None
     # corpus steep 5171282111, one frame's fit: its surface echo 8.04 ms behind with its Doppler misread
     # within 0.04 m/s of the direct path's, the bottom echo 9.65 ms, at 10.9 m: as a bottom image and one
     # echo for the surface–bottom pair it would put a surface image 72 µs behind; no image of a geometry

@@ -18,8 +18,9 @@ and δ = (u² − d₀²)/s, independent of s: the three lags alone set it (the 
 scale). The lags a fit measures are after the merged pair's arrival, itself about Re(w)·δ late: the caller
 adds that back (:func:`depths_from_echoes`'s ``lead_s``).
 
-An echo pattern this does not explain is not used: the three echoes' gains must be alike (one bottom
-bounce each; a surface bounce costs ≤ 20 %), the geometry physical (0 < z < H), the image merged (δ < 1/B),
+An echo pattern this does not explain is not used: the surface–bottom images' gains must be those of the
+bottom image less one surface bounce (≤ 20 %; this also tells the pattern from its mirror image, both ends
+near the bottom, whose pair is weaker than its first echo by the bottom's loss), the geometry physical (0 < z < H), the image merged (δ < 1/B),
 and every other echo the fit holds with a tenth of the first path's gain or more must lie where an image of
 the first two orders does. A steep channel whose surface image is resolved has that image as its first echo,
 and its three first echoes do not form this pattern.
@@ -39,8 +40,13 @@ __all__ = ["ImageDepths", "GEOMETRY_MIN_GAIN", "depths_from_echoes", "pooled_dep
 #: echoes at least this share of the first path's gain are the pattern's (the fit's weak paths, 0.01–0.05 of
 #: it in the corpus's far family, are its noise)
 GEOMETRY_MIN_GAIN = 0.1
-#: the three echoes' gains within this factor of each other (one bottom bounce each)
-_GAIN_RATIO = 3.0
+#: the surface–bottom images' gains over the bottom image's (the first echo's): one surface bounce more,
+#: ρ 0.8–0.98 at grazing; resolved, each within these, and as one echo (the two adding or cancelling)
+#: within the second pair. The waveguide's mirror image (both ends near the bottom: a merged bottom image,
+#: the surface image first, the pairs one bottom bounce more) gives the same lags and the same δ, but its
+#: pair is weaker than its first echo by the bottom's loss: corpus fading 1887576187, a bottom image 0.47
+#: at 38 µs merged, its pair 0.3–0.56 of the surface echo's gain
+_PAIR_RATIO, _MERGED_PAIR_RATIO = (0.6, 1.5), (0.4, 2.2)
 #: an echo is an image's when within this share of 1/B of its lag
 _MATCH_B = 0.5
 #: an image of a merged surface image's geometry travels nearly parallel to the direct path (grazing: sin θ of
@@ -143,7 +149,9 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
 
     def attempt(idx, merged: bool):
         lg = lags[idx] + lead_s
-        if np.max(gains[idx]) > _GAIN_RATIO * np.min(gains[idx]):
+        low, high = _MERGED_PAIR_RATIO if merged else _PAIR_RATIO
+        ratios = gains[idx[1:]] / gains[idx[0]]
+        if np.any(ratios < low) or np.any(ratios > high):
             return None
         if np.any(gaps[idx] > GRAZING_DOPPLER_MPS + 3 * sig_v[idx]):
             return None
