@@ -1613,14 +1613,14 @@ class FrameMeasurer:
         # (echo_image) is an inference: the bend keeps counting in full, its bound a cover beside the image's
         # σ (corpus far 2911526075: the echoes' clusters placed the image 21 µs behind for 7 µs, and the bend
         # less that image's left frames 3.4–5.6σ off that the bend had covered)
-        bend_image = image if self.images_modelled else None
+        explained = image if self.images_modelled else None
         fit = (self._whole_frame(m, dec, bb, t0_s, fs, image)
                if dec is not None and self.settings.whole_frame_doppler else None)
         if fit is not None and fit.source == "whole_frame":
             # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
-            self._curvature_pool.add_fit(fit.fit, fit.first, bend_image, range_m)
+            self._curvature_pool.add_fit(fit.fit, fit.first, explained, range_m)
             echoes = fit_echoes(fit.fit, fit.first)
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
@@ -1676,7 +1676,7 @@ class FrameMeasurer:
         sigma_tau_rejected = 0.0
         if rejected is not None:
             sigma_tau_rejected = unmodelled_sigmas(rejected[2].fit, rejected[2].first, self.config, sound_speed_mps=c,
-                                                   pooled_merge_delay_s=pooled_merge, image=bend_image)[1]
+                                                   pooled_merge_delay_s=pooled_merge, image=explained)[1]
             # two independent estimates of the same speed further apart than 3 combined σ: one of them is
             # wrong and the frame does not say which, so the one used (the tone) has a σ that covers the gap
             gap_fit2 = (rejected[0] - v_tone) ** 2 - 9 * (rejected[1] ** 2 + sigma_tone_gap**2)
@@ -1694,7 +1694,7 @@ class FrameMeasurer:
             pooled_rate = self.pooled_fade_rate_hz
             sigma_v_un, _ = unmodelled_sigmas(wf, first, self.config, sound_speed_mps=c,
                                               pooled_amp_rate_hz=pooled_rate, pooled_merge_delay_s=pooled_merge,
-                                              image=bend_image)
+                                              image=explained)
             own_rate = 0.0 if wf.amp_rate_hz is None else float(wf.amp_rate_hz[first])
             sigma = math.hypot(sigma, sigma_v_un)
             # a merged surface image's Doppler: with the depths, the image's; without them, the one a bend
@@ -1717,7 +1717,7 @@ class FrameMeasurer:
             # instants), and apart from it the channel shape's, which the pilot's arrival shares
             sigma_tau_fit = math.hypot(float(wf.sigma_delay_s[first]) * inflation, time_scale_delay_s(
                 math.hypot(sigma_v_un, sigma_2c), self.config, sound_speed_mps=c))
-            shape = channel_shape_delay_s(wf, first, pooled_merge, bend_image)
+            shape = channel_shape_delay_s(wf, first, pooled_merge, explained)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, sigma_tau_pilot_pull=pilot_pull,
                         pilot_excess=pilot_excess,
