@@ -141,7 +141,7 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
         return None
     if np.any((gains >= GEOMETRY_MIN_GAIN) & (lags > 0) & (lags < one_b)):
         return None  # a path within the pulse's width: not a merged pair alone
-    strong = np.flatnonzero((gains >= GEOMETRY_MIN_GAIN) & (lags >= one_b))
+    strong = np.flatnonzero(_strong(lags, gains, one_b))
     strong = strong[np.argsort(lags[strong])]
     if strong.size < 2:
         return None
@@ -203,9 +203,13 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
     return found if found is not None else attempt(strong[:2], True)
 
 
+def _strong(lags: np.ndarray, gains: np.ndarray, one_b: float) -> np.ndarray:
+    """Which echoes are the pattern's candidates: a tenth of the first path's gain or more, 1/B or more behind it."""
+    return (gains >= GEOMETRY_MIN_GAIN) & (lags >= one_b)
+
+
 def _n_strong(echoes, one_b: float) -> int:
-    lags, gains = np.asarray(echoes[0], float), np.asarray(echoes[1], float)
-    return int(np.count_nonzero((gains >= GEOMETRY_MIN_GAIN) & (lags >= one_b)))
+    return int(np.count_nonzero(_strong(np.asarray(echoes[0], float), np.asarray(echoes[1], float), one_b)))
 
 
 def pooled_depths(pool, range_m: float, *, config: FrameConfig, sound_speed_mps: float, lead_s=None,
