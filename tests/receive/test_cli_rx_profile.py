@@ -185,3 +185,14 @@ def test_a_depth_log_that_cannot_be_used_is_a_one_line_error(beacon, tmp_path, c
                  str(tmp_path / "depth.csv")] + extra) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and words in err and not out.exists(), err
+
+
+def test_no_echo_geometry_reaches_the_receiver_and_its_header(beacon, tmp_path):
+    # the option turns off the depths inferred from the echoes (ReceiverSettings.echo_geometry); the header
+    # says which was used. This beacon has no echoes, so the records themselves are the same either way
+    on, off = tmp_path / "on.csv", tmp_path / "off.csv"
+    assert main(["rx", str(beacon[2]), "-o", str(on), "-q"]) == 0
+    assert main(["rx", str(beacon[2]), "-o", str(off), "-q", "--no-echo-geometry"]) == 0
+    (on_recs, on_head), (off_recs, off_head) = read_measurements(on), read_measurements(off)
+    assert on_head["echo_geometry"] is True and off_head["echo_geometry"] is False
+    assert [r.range_m for r in on_recs] == [r.range_m for r in off_recs]
