@@ -158,15 +158,16 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
         if merged:
             a, m = lg
             # the split e − b from 0 to 1/B: b, e = m ∓ split/2
-            splits = np.linspace(0.0, one_b, 5)
-            sols = [_solve(a, m - x / 2, m + x / 2, s) for x in splits]
-            sols = [x for x in sols if x is not None]
-            if not sols:
+            # (the lags' σ below is differenced from the split whose solution is the middle one: when some
+            # splits do not solve, that is not the middle split)
+            tried = [(x, _solve(a, m - x / 2, m + x / 2, s)) for x in np.linspace(0.0, one_b, 5)]
+            solved = [(x, sol) for x, sol in tried if sol is not None]
+            if not solved:
                 return None
-            deltas = np.array([x[3] for x in sols]) / s
-            mid = sols[len(sols) // 2]
+            deltas = np.array([sol[3] for _, sol in solved]) / s
+            split, mid = solved[len(solved) // 2]
             spread = float(np.ptp(deltas)) / 2
-            base = (a, m - splits[len(splits) // 2] / 2, m + splits[len(splits) // 2] / 2)
+            base = (a, m - split / 2, m + split / 2)
         else:
             mid = _solve(*lg, s)
             if mid is None:
