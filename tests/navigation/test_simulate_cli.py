@@ -96,6 +96,6 @@ def test_the_docs_simulate_commands_run(tmp_path, monkeypatch):
     assert len(commands) == 2
     monkeypatch.chdir(tmp_path)
     for command in commands:
-        # with 4 runs instead of the page's 20 (appended last, it replaces the page's --runs: 36 s -> about 8 s
+        # with 4 runs instead of the page's 20 (appended last, it replaces the page's --runs: 36 s -> about 10 s
         # of the suite); every other option as written. The page's figures are the benchmark's
         assert main([*shlex.split(command)[1:], "--runs", "4"]) == 0, command

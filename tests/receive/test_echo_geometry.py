@@ -50,7 +50,6 @@ def test_three_echo_lags_give_the_depths_and_the_merged_images_delay(zb, zv, dep
     assert with_sbs == g
 
 
-
 def test_merged_pair_whose_wider_splits_do_not_solve_keeps_a_delay_sigma_at_the_lags_scale():
     # both ends 1 m deep in 12 m of water at 1 km: SB and BS coincide (one echo for both), and of the splits
     # 0…1/B tried for them only the narrower three give a geometry. The lags' σ is differenced from the split
@@ -64,6 +63,7 @@ def test_merged_pair_whose_wider_splits_do_not_solve_keeps_a_delay_sigma_at_the_
     got = merged_image_delay_s(1000.0, g.z1_m, g.z2_m, config=CFG, sound_speed_mps=C)
     assert g.delay_sigma_s < 0.05 / CFG.bandwidth_hz
     assert abs(got - truth) <= 3 * g.delay_sigma_s
+
 
 def test_echo_patterns_of_other_channels_give_no_depths():
     lags = exact_lags(3.0, 4.0, 15.0, 800.0)
