@@ -160,7 +160,10 @@ def inertial_mission_kernel(mission, z0, P0, lay, model, settings, sensors):
     fix_var_n = np.ones(N)
     bearing_n = np.zeros(N)
     bearing_var_n = np.full(N, max(bearing_sigma, 1e-9) ** 2)
-    nodes = NodeData(dts, sensors[:, 1], sensors[:, 2], has_heading, sensors[:, 0], heading_var_n, used_frame, meas_n,
+    # the nodes' own contiguous copies of the readings (not views of ``sensors``' columns): the kernels then see
+    # the same array types as from filter_nodes, and numba compiles them once, not twice (~30 s cold)
+    heading_n, omega_n, accel_n = np.zeros(N), np.zeros(N), np.zeros(N)
+    nodes = NodeData(dts, omega_n, accel_n, has_heading, heading_n, heading_var_n, used_frame, meas_n,
                      meas_var_n, no_fix, fix_n, fix_var_n, used_bearing, bearing_n, bearing_var_n)
     x, y, psi, v = start[0], start[1], start[2], start[3]
     z[0] = x + start_offsets[0]
@@ -170,17 +173,17 @@ def inertial_mission_kernel(mission, z0, P0, lay, model, settings, sensors):
     heading0 = psi + bias + sigmas[0] * noise[0, 0]
     z[2] = heading0 - z[4]  # P0 is the prior after this reading (InertialConfig.initial)
     to_internal(z, P, lay, beacon)  # z0, P0 come Cartesian
-    sensors[0, 0] = heading0
+    sensors[0, 0] = heading_n[0] = heading0
     sensors[0, 1] = sensors[0, 2] = 0.0
     sensors[0, 3] = sensors[0, 4] = np.nan
     if window:
-        record_prior(0, z, P, None, lay, track)
+        record_prior(np.int64(0), z, P, None, lay, track)  # a typed 0: no literal-0 specialization
     ex, ey = cartesian(z, lay, beacon)
     estimate[0, 0], estimate[0, 1] = ex, ey
     truth[0, 0], truth[0, 1] = x, y
     error[0] = np.sqrt((ex - x) ** 2 + (ey - y) ** 2)
-    gated_run = 0
-    bearing_gated = 0
+    gated_run = np.int64(0)  # typed, not literal 0: gated_acoustic/gated_bearing compile once
+    bearing_gated = np.int64(0)
     sensors[0, 5] = np.nan
     scale = 1.0 + range_scale
     sx, sy, spsi, sv = (ex, ey, z[2], z[3]) if steer_on_estimate else (x, y, psi, v)
@@ -195,6 +198,8 @@ def inertial_mission_kernel(mission, z0, P0, lay, model, settings, sensors):
         bias = bias_step(bias, sigmas, noise, k, bias_rate, dt)
         head_m, omega_m, accel_m = imu_reading(psi, bias, omega, accel_true, sigmas, noise, k)
         sensors[k, 0], sensors[k, 1], sensors[k, 2] = head_m, omega_m, accel_m
+        if window:
+            heading_n[k], omega_n[k], accel_n[k] = head_m, omega_m, accel_m
         sensors[k, 3] = sensors[k, 4] = sensors[k, 5] = np.nan
         predict(z, P, lay, model, omega_m, accel_m, dt, ws)
         if window:

@@ -162,11 +162,11 @@ def choose_chart(z, P, lay, beacon, F):
         rho = z[0]
         var = P[0, 0] + rho * rho * P[1, 1]
         if rho <= 0.0 or var * POLAR_LEAVE * POLAR_LEAVE > rho * rho:
-            convert_chart(z, P, lay, beacon, 0, F)
+            convert_chart(z, P, lay, beacon, np.int8(0), F)  # int8 as charts[i]: one compile
     else:
         dx, dy = z[0] - beacon[0], z[1] - beacon[1]
         if (P[0, 0] + P[1, 1]) * POLAR_ENTER * POLAR_ENTER < dx * dx + dy * dy:
-            convert_chart(z, P, lay, beacon, 1, F)
+            convert_chart(z, P, lay, beacon, np.int8(1), F)
 
 
 @njit(cache=True, nogil=True)

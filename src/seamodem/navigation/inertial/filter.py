@@ -150,9 +150,11 @@ def filter_span(i_begin, i_end, z, P, lay, model, settings, nodes, track, out, r
     runs[1] = bearing_gated
 
 
-@njit(cache=True, nogil=True)
 def filter_nodes(z0, P0, lay, model, settings, nodes, history):
     """Run the filter over nodes; fill the posterior states and covariances.
+
+    Plain Python around the compiled :func:`filter_span` (it only allocates): a jitted wrapper would re-optimize
+    the whole compiled filter once more when numba's cache is cold (about 10 s).
 
     Parameters
     ----------

@@ -178,7 +178,7 @@ def linearized_pass(nominal, z0, P0, lay, charts, model, nodes, out):
             update_heading(z, P, nominal[i, 2] + nominal[i, 4] + wrap(heading[i] - nominal[i, 2] - nominal[i, 4]),
                            heading_var[i], ph)
         if use_bearing[i]:
-            update_bearing(z, P, lay, beacon, nominal[i], bearing[i], bearing_var[i], np.inf, True, ph)
+            update_bearing(z, P, lay, beacon, nominal[i], bearing[i], bearing_var[i], np.inf, np.bool_(True), ph)
         if has_fix[i]:
             update_position(z, P, lay, beacon, nominal[i], fix[i], fix_var[i], ph)
         for a in range(n):
