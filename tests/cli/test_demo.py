@@ -59,3 +59,17 @@ def test_demo_config_validates():
     with pytest.raises(ConfigError, match="depth_m"):
         DemoConfig(depth_m=30.0)
     assert DemoConfig().frame_count() == 51  # 151 s survey at T_com = 3 s: frames at 0 … 150 s
+
+
+def test_demo_progress_names_each_stage_in_order(tmp_path, capsys):
+    # the stage bar (on stderr, forced on here: by default it shows on a terminal only) names the stage that
+    # is running, so a first run's minute of compiling is seen to be the filters'
+    from seamodem.demo import run_demo
+
+    run_demo(DemoConfig(duration_s=6.0), tmp_path / "demo", plots=False, progress=True)
+    err = capsys.readouterr().err
+    stages = ["demo: beacon and channel", "demo: receiver and decoder (2 frames)", "demo: filters",
+              "demo: files and figures"]
+    at = [err.find(s) for s in stages]
+    assert -1 not in at and at == sorted(at), (at, err[-500:])
+    assert "4/4" in err  # the last stage counted done

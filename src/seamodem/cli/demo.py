@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"seamodem demo: {cfg.frame_count()} frames, one every {cfg.tcom_s:g} s, "
               f"{cfg.mission_s():.0f} s mission; writing {out}/ ...", flush=True)
-    result = run_demo(cfg, out, keep_audio=args.keep_audio, plots=args.plots, images_dir=args.images)
+    result = run_demo(cfg, out, keep_audio=args.keep_audio, plots=args.plots, images_dir=args.images,
+                      progress=False if args.quiet else None)  # bars on a terminal only
     if not args.quiet:
         print(format_summary(result.summary))
         print(f"wrote {', '.join(result.files)} in {out}/")

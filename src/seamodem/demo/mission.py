@@ -485,15 +485,34 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
     plots : bool
         Draw the figures.
     progress : bool or None
-        Progress bars of the beacon and the channel.
+        Progress bars of the beacon and the channel, and one over the mission's stages (receiver, filters,
+        files): None shows them only when stderr is a terminal. The first run on a machine spends about a
+        minute in the filters' stage while numba compiles their kernels; the bar says which stage is running.
 
     Returns
     -------
     DemoResult
     """
+    from .._progress import progress_bar
+
+    # every stage drawn (mininterval 0: four updates in all)
+    with progress_bar(total=4, desc="demo: beacon and channel", unit="stage", enabled=progress,
+                      mininterval=0) as stages:
+        return _run_demo(cfg, Path(output_dir), keep_audio=keep_audio, plots=plots, images_dir=images_dir,
+                         progress=progress, stages=stages)
+
+
+def _stage(bar, desc: str) -> None:
+    """The stage bar: the last stage done, the next one named."""
+    bar.update(1)
+    bar.set_description_str(desc)
+
+
+def _run_demo(cfg: DemoConfig, out: Path, *, keep_audio: bool, plots: bool, images_dir, progress, stages
+              ) -> DemoResult:
+    """:func:`run_demo`'s work, its stages on the bar ``stages``."""
     from ..receive import write_measurements
 
-    out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
     clock = {"start": time.perf_counter()}
     rng_imu, rng_emul = (np.random.default_rng(s) for s in np.random.SeedSequence(cfg.seed).spawn(2))
@@ -506,12 +525,14 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         audio = out if keep_audio else Path(tmp)
         sidecar = emit_and_propagate(cfg, vehicle, audio, progress=progress)
         clock["channel"] = time.perf_counter()
+        _stage(stages, f"demo: receiver and decoder ({count} frames)")
         grab_at = count // 2
         records, grabbed = receive(audio / "received.wav", sidecar, grab_frame=grab_at)
         clock["receiver"] = time.perf_counter()
         psd = _psd(audio / "received.wav", sidecar) if plots and cfg.waveform == "frame" else None
         array_records, array_summary = array_mission(cfg, vehicle, audio, sidecar) if cfg.array else (None, None)
         clock["array"] = time.perf_counter()
+    _stage(stages, "demo: filters (about a minute on a first run, while numba compiles them)")
     truth = sidecar["truth"]
     errs = measurement_errors(records, truth)
     sigma_r, sigma_v = rms(errs["range_error_m"]), rms(errs["v_r_error_mps"])
@@ -523,6 +544,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
         tracks[("waveform", f)] = navigate(meas, vehicle, cfg, filter=f)
         tracks[("emulated", f)] = navigate(emulated, vehicle, cfg, filter=f)
     clock["navigation"] = time.perf_counter()
+    _stage(stages, "demo: files and figures")
 
     summary = mission_summary(cfg, vehicle, sidecar, records, errs, tracks, clock, array_summary)
 
@@ -564,6 +586,7 @@ def run_demo(cfg: DemoConfig = DemoConfig(), output_dir: str | Path = "demo_out"
             Path(images_dir).mkdir(parents=True, exist_ok=True)
             shutil.copyfile(out / "map.png", Path(images_dir) / "demo_map.png")
     summary["wall_time_s"]["total"] = time.perf_counter() - clock["start"]
+    stages.update(1)
     (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
     files.append("summary.json")
     if keep_audio:
