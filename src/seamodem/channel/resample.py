@@ -154,6 +154,9 @@ def render_paths(
     else:
         gain_q = np.ascontiguousarray(np.broadcast_to(gain_q, pos.shape), dtype=np.float64)
         use_q = np.any(gain_q != 0.0, axis=1)
+    # the gains read-only whether or not broadcasting copied them: numba compiles the kernel once
+    gain_i, gain_q = gain_i.view(), gain_q.view()
+    gain_i.flags.writeable = gain_q.flags.writeable = False
     if out is None:
         out = np.zeros(pos.shape[1])
     if pos.size == 0:

@@ -260,9 +260,11 @@ def dfe_equalize(
     s = settings
     x = np.ascontiguousarray(x, dtype=np.complex128)
     train = np.ascontiguousarray(training, dtype=np.complex128)
+    # every argument typed as the kernel's one signature (a PLL gain given as 0 would compile a second one)
     soft, dec, phase, w = _dfe(
-        x, s.sps, int(n_symbols), train, train.size, s.n_ff, s.ff_centre, s.n_fb, s.algorithm == "rls",
-        s.forgetting, s.step, s.pll_kp, s.pll_ki, s.rls_delta, constellation(modulation).astype(np.complex128),
+        x, int(s.sps), int(n_symbols), train, train.size, int(s.n_ff), int(s.ff_centre), int(s.n_fb),
+        s.algorithm == "rls", float(s.forgetting), float(s.step), float(s.pll_kp), float(s.pll_ki),
+        float(s.rls_delta), constellation(modulation).astype(np.complex128),
     )
     dd = slice(train.size, None)
     noise_var = float(np.mean(np.abs(soft[dd] - dec[dd]) ** 2)) if n_symbols > train.size else float("nan")
