@@ -132,6 +132,41 @@ def test_pilot_noise_excess_sees_impulses_on_the_pilot_only():
         late[k : k + 40] += 10 * sigma * np.exp(-n / 10) * np.cos(2 * np.pi * 0.3 * n + rng.uniform(0, 6.3))
     assert _fit(late, ta).pilot_noise_excess < 1.3
 
+def test_pilot_es_n0_is_the_direct_paths_own_whatever_the_echoes_and_the_decisions():
+    # three paths, the direct one at 12 dB (Es/N0 = SNR·(1 + α)): over its pilot, the echoes' models taken
+    # out, its Es/N0 is its own; a reference whose data decisions are wrong in a third of the symbols leaves
+    # it so, where the whole frame's Es/N0 (amplitude and residual over every symbol) collapses
+    expected = 10 ** (12.0 / 10) * (1 + CFG.rolloff)
+    plan = plan_front_end(CFG, FS, v_max_mps=5, sound_speed_mps=C)
+    n_data = CFG.n_data
+    own, whole, wrong_own, wrong_whole = [], [], [], []
+    for seed in range(3):
+        x, ta = _received(seed, 12.0)
+        fe = FrontEnd(plan)
+        bb = np.concatenate([fe.push(x)[0], fe.flush()[0]])
+        for flip, out_own, out_whole in ((0.0, own, whole), (1 / 3, wrong_own, wrong_whole)):
+            symbols = np.array(FRAME.symbols, complex)
+            rng = np.random.default_rng(100 + seed)
+            symbols[CFG.n_pilot:][rng.random(n_data) < flip] *= -1
+            fit = fit_whole_frame(
+                bb, plan.fs_data, 0.0, config=CFG, symbols=symbols, reference=np.ones(len(symbols), bool),
+                delays_s=[ta + d for d, _, _ in PATHS], v_mps=V + 0.05, sound_speed_mps=C,
+            )
+            out_own.append(fit.pilot_es_n0 / expected)
+            out_whole.append(fit.es_n0[0] / expected)
+    # 150 outputs: the noise's estimate scatters by 1/√150 ≈ 8 %; each echo's is its gain² of the direct's
+    own = np.array(own)
+    assert np.all((own[:, 0] > 0.75) & (own[:, 0] < 1.3))
+    gains2 = np.array([g**2 for _, g, _ in PATHS])
+    assert np.all(np.abs(own[:, 1:] / gains2[1:] - 1) < 0.3)
+    # on wrong decisions the fit itself strays (a Doppler 0.17 m/s off, the pilot's Es/N0 then 0.73 of it)
+    wrong_own = np.array(wrong_own)
+    assert np.all((wrong_own[:, 0] > 0.6) & (wrong_own[:, 0] < 1.3))
+    assert np.all(np.array(whole) > 0.75)
+    # (1 − 2/3)² of the amplitude's power, and the wrong third's in the residual: about a tenth of it
+    assert np.all(np.array(wrong_whole) < 0.2)
+
+
 def test_blanker_zeroes_an_impulse_and_its_stretch_only():
     x = np.random.default_rng(0).standard_normal(20_000)
     x[5000] = 80.0

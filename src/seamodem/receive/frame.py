@@ -1262,6 +1262,9 @@ class FrameMeasurer:
         # two σ's (unbiased, not clipped) [s²]: how far this channel moves the pilot's arrival beyond what
         # its σ holds, for a frame whose range is the pilot's arrival (_record)
         self._pilot_gaps: collections.deque[float] = collections.deque(maxlen=_ECHO_POOL_FRAMES)
+        # the pilot's path's Es/N0 that the measured SNR gives it, over the one the last frames' whole-frame
+        # fits measured over their pilots: a frame without a fit of its own
+        self._pilot_noise_ratios: collections.deque[float] = collections.deque(maxlen=_ECHO_POOL_FRAMES)
         self._last_amplitude: tuple[float, float, float] | None = None
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
         #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate, the rate its v_r took [Hz]
@@ -1386,6 +1389,11 @@ class FrameMeasurer:
         # around the frame may miss them: a pilot 16 mm off with σ 3.1 mm, its outputs' excess 1.5, the
         # windows' 1.0)
         pilot_excess = doppler.pop("pilot_excess", 1.0)
+        # and the pilot's Es/N0 over its own outputs less than the measured SNR gives it (a whole-frame fit's, its
+        # other paths taken out): noise that blanking left larger within the frame than around it (α-stable
+        # noise at 3 dB: 0.49 of it, the pilot's arrivals 1.5 times their σ), echoes the pilot's fit did not
+        # resolve (four echoes 2–10 ms behind, none in the pilot's fit: 2.3 times)
+        pilot_excess = max(pilot_excess, doppler.pop("pilot_noise_ratio", 1.0))
         if pilot_excess > excess:
             sigma_tau *= math.sqrt(pilot_excess / excess)
         # the pilot's arrival: its CRLB and the pull of the echoes it did not model (the fit's, where one was made)
@@ -1666,6 +1674,17 @@ class FrameMeasurer:
         pilot_pull = 0.0 if shown is None else pilot_sidelobe_sigma_s(
             shown.fit, shown.pilot_path, m.paths.delays_s, self.config, self.pilot, eps=m.pilot.v_mps / c)
         pilot_excess = 1.0 if shown is None else float(shown.fit.pilot_noise_excess)
+        # the pilot's path's Es/N0 over the pilot, the fit's other paths taken out, against what the measured
+        # SNR gives it: noise the windows around the frame did not show (impulses the signal hid from the
+        # blanker), or echoes the pilot's own fit did not resolve, which took signal from its path
+        expected_es_n0 = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
+        measured = math.nan if shown is None or shown.fit.pilot_es_n0 is None \
+            else float(shown.fit.pilot_es_n0[shown.pilot_path])
+        if measured > 0:
+            noise_ratio = expected_es_n0 / measured
+            self._pilot_noise_ratios.append(noise_ratio)
+        else:  # no fit of its own: the last frames'
+            noise_ratio = float(np.median(self._pilot_noise_ratios)) if self._pilot_noise_ratios else 1.0
         if (fit is None or fit.source != "whole_frame") and self._decoded_echoes:
             # the pilot's arrival is the range: the echoes of the last decoded frames pull it too (the median
             # of their pulls), where this frame's own fit on decisions did not see them (an impulsive
@@ -1720,7 +1739,7 @@ class FrameMeasurer:
             shape = channel_shape_delay_s(wf, first, pooled_merge, explained)
             biased = abs(v_tone - v) > 3 * math.hypot(sigma_tone, sigma)
             return dict(v_r_mps=v, sigma_v_r_mps=sigma, sigma_bank=sigma_bank, sigma_tau_pilot_pull=pilot_pull,
-                        pilot_excess=pilot_excess,
+                        pilot_excess=pilot_excess, pilot_noise_ratio=noise_ratio,
                         v_r_source=source, v_r_tone_mps=v_tone,
                         tone_multipath_biased=bool(biased) if math.isfinite(v_tone) else None,
                         v_r_paths_spread_mps=float(np.ptp(wf.v_mps)), n_paths=len(wf.v_mps),
@@ -1734,11 +1753,13 @@ class FrameMeasurer:
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
             return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank,
-                        sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, v_r_source="bank",
+                        sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, pilot_noise_ratio=noise_ratio,
+                        v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s),
                         sigma_tau_unmodelled=sigma_tau_unmodelled), None
         return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank,
-                    sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, v_r_source="tone",
+                    sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, pilot_noise_ratio=noise_ratio,
+                    v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),
                     n_paths=len(m.paths.delays_s), sigma_tau_unmodelled=sigma_tau_unmodelled), None
 

@@ -127,6 +127,11 @@ class WholeFrameFit:
     pilot_noise_excess : float
         Mean over median-implied power (× ln 2; ≥ 1, 1 for Gaussian noise) of the residual's matched-filter
         outputs at the pilot's symbols: the impulses left where the pilot lies, which the pilot's arrival sees.
+    pilot_es_n0 : numpy.ndarray or None
+        Each path's Es/N0 over the pilot's symbols alone, the other paths' models taken out at their gains over
+        the pilot: the gain from the known pilot (not from data decisions), the noise from the outputs' scatter
+        about a gain fitted in each fifth of the pilot (a phase the fit's Doppler leaves there is not counted);
+        NaN when the reference does not hold the whole pilot.
     noise_var : float
         The residual's power per matched-filter output at the first path's instants (``es_n0``'s noise).
     earlier_path : tuple or None
@@ -150,6 +155,7 @@ class WholeFrameFit:
     curvature_noise_s4: np.ndarray | None = None
     delay_scatter_s: np.ndarray | None = None
     pilot_noise_excess: float = 1.0
+    pilot_es_n0: np.ndarray | None = None
     noise_var: float = math.nan
     earlier_path: tuple[float, complex, float] | None = None
 
@@ -771,6 +777,10 @@ def _segment_gain(phase, counts, amp, t_mid_s, t_s):
     return np.interp(t_s, ts + t_mid_s, g.real) + 1j * np.interp(t_s, ts + t_mid_s, g.imag)
 
 
+#: the pilot's outputs are split in this many parts, each with its own gain, for a path's Es/N0 over the pilot
+_PILOT_GAIN_SEGMENTS = 5
+
+
 def fit_whole_frame(
     bb: np.ndarray,
     fs: float,
@@ -1018,6 +1028,35 @@ def fit_whole_frame(
     # the pilot's own outputs' noise: its mean over the median-implied power (1 for Gaussian noise), the
     # impulses that blanking left where the pilot lies (the noise windows around the frame may miss them)
     pilot_excess = max(1.0, power_excess(np.abs(noise[: config.n_pilot]) ** 2) or 1.0)
+    # each path's Es/N0 over the pilot alone, the other paths taken out: the known pilot gives each path's gain
+    # whatever the data decisions (a fit on decisions has them wrong in runs, which shrinks every path's fitted
+    # gain and would leave part of each echo in the others' outputs), the outputs' scatter about it the noise
+    # there, which blanking may leave larger than the noise windows around the frame show (α-stable noise:
+    # impulses the signal hides from the blanker's robust scale)
+    pilot_es_n0 = np.full(n_paths, math.nan)
+    if config.n_pilot >= 4 * _PILOT_GAIN_SEGMENTS and np.all(np.asarray(reference)[: config.n_pilot]):
+
+        def pilot_outputs(p, r):
+            inst = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx[: config.n_pilot]]
+            y = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p])
+            return y * np.exp(-1j * path_phase(config, inst - delays[p], 0.0, beta[p])) \
+                * np.conj(x[ref_idx[: config.n_pilot]])
+
+        unit = np.array([m / a if abs(a) > 0 else np.zeros_like(m) for m, a in zip(models, amps)]) \
+            if n_paths > 1 else None
+        gains = amps.copy()
+        for _ in range(3 if n_paths > 1 else 1):  # Gauss–Seidel over the paths' pilot gains
+            for p in range(n_paths):
+                others = 0.0 if n_paths == 1 else np.tensordot(np.delete(gains, p), np.delete(unit, p, axis=0), 1)
+                zp = pilot_outputs(p, seg_bb - others)
+                gains[p] = np.mean(zp)
+                # the gain segment by segment: a phase the fit's Doppler leaves over the pilot (a fit on
+                # wrong decisions bends it) is not noise to the pilot's own arrival, which fits its own Doppler
+                parts = np.array_split(zp, _PILOT_GAIN_SEGMENTS)
+                spread = sum(float(np.sum(np.abs(q - np.mean(q)) ** 2)) for q in parts) \
+                    / (config.n_pilot - len(parts))
+                power = np.mean([abs(np.mean(q)) ** 2 for q in parts]) - spread / (config.n_pilot / len(parts))
+                pilot_es_n0[p] = max(power, 0.0) / max(spread, np.finfo(float).tiny)
     es_n0 = np.abs(amps) ** 2 / noise_var
     crlb = known_signal_velocity_crlb_mps(config, es_n0, n_ref, sound_speed_mps=c)
     sigma_ls = c * sigma_b / (2 * np.pi * f0)
@@ -1131,6 +1170,7 @@ def fit_whole_frame(
         curvature_s2=curv[order],
         curvature_noise_s4=curv_noise[order],
         pilot_noise_excess=pilot_excess,
+        pilot_es_n0=pilot_es_n0[order],
         noise_var=noise_var,
         earlier_path=earlier_path(resid, (models[direct] if n_paths > 1 else total) / amps[direct], fs, config,
                                   reach_s=earlier_reach_s) if earlier_reach_s > 0 and abs(amps[direct]) > 0 else None,
