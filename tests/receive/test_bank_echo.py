@@ -6,6 +6,8 @@ weaker ones). The bank, from the pilot alone (a Doppler resolution of 2.3 m/s), 
 4 frames of 10, 4–6 of its CRLB: (i) its own σ column was too small, and (ii) as the referee of the
 whole-frame fit, its gap gave right fits (0.1–0.9 mm/s off) σ's of 40–110 mm/s. A two-path analytic
 channel (one echo, constant Doppler) pulls the bank by 1σ only: the corpus's channel is the test.
+Since session 31 the echoes over the pilot are searched for every frame (``measure_frame``), also where
+the arrival fit within ±12 symbols held a lone path, and the bank's Doppler is fitted with them.
 """
 
 from __future__ import annotations
@@ -26,8 +28,9 @@ def test_the_bank_pulled_by_echoes_neither_lies_nor_inflates_the_fit():
     sig = np.array([r["sigma_v_r_mps"] for r in rows])
     bank_err = np.array([r["v_r_bank_mps"] - r["v_r_true_mps"] for r in rows])
     bank_sig = np.array([r["sigma_v_r_bank_mps"] for r in rows])
-    # the pull is there (what the test is about)
-    assert np.sum(np.abs(bank_err) > 0.07) >= 3, bank_err
+    # the echo is searched over the pilot even where the arrival fit held a lone path, and taken out of the
+    # bank's Doppler: no frame's bank beyond 0.07 m/s (4 of 10 were, 0.08–0.13 m/s, before session 31)
+    assert np.all(np.abs(bank_err) < 0.07), bank_err
     # the bank's own σ covers it
     assert np.all(np.abs(bank_err) <= 3 * bank_sig), (bank_err, bank_sig)
     # and the fit keeps its own scale: within 3σ, σ of mm/s

@@ -123,13 +123,16 @@ def measure_frame(
     )
     paths = find_precursors(bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, paths=paths,
                             t_start_s=fit.t_start_s, eps=fit.v_mps / c, es_n0=fit.es_n0)
-    echoes = None
-    if len(paths.delays_s) > 1:
-        # unresolved echoes pull the single-path fit towards them: take the first path's
-        # delay, and its Doppler with the echoes' pilots removed. The echoes are searched
-        # here, once (direct_path_doppler would search them itself, and the whole-frame
-        # fit needs them again): given them and no more to find, it only refits amplitudes
-        echoes = find_echoes(bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, paths=paths, eps=fit.v_mps / c)
+    # unresolved echoes pull the single-path fit towards them: take the first path's
+    # delay, and its Doppler with the echoes' pilots removed. The echoes are searched
+    # here, once (direct_path_doppler would search them itself, and the whole-frame
+    # fit needs them again): given them and no more to find, it only refits amplitudes.
+    # A lone path within the arrival fit's ±12 symbols is searched too: echoes up to a
+    # pilot's length behind it overlap its pilot all the same (a bottom echo 2–3 ms late)
+    echoes = find_echoes(bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, paths=paths, eps=fit.v_mps / c)
+    if len(echoes.delays_s) < 2:
+        echoes = None
+    if echoes is not None:
         eps = direct_path_doppler(
             bb,
             plan.fs_data,
