@@ -1639,6 +1639,8 @@ class FrameMeasurer:
                     np.asarray(fit.fit.sigma_v_mps)[others], np.asarray(fit.fit.sigma_delay_s)[others]))
         pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
+        # the direct path's Es/N0 that the measured SNR gives it
+        expected_es_n0 = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
         rejected = None  # (v, σ, the fit) of a fit on decisions not used: the tone's σ must still cover its gap to it
         if fit is not None and fit.source == "whole_frame_decisions":
             # decided symbols can be wrong in runs and pull the fit away: they bias every segment alike,
@@ -1658,8 +1660,7 @@ class FrameMeasurer:
             # A fit that moves further than a tilt given to its decisions' reference, or against it
             # (decisions_follow; NaN, a refit that failed, counts so), is no better known: it stands on
             # which decisions the tilt flips
-            expected = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
-            if (float(fit.fit.es_n0[fit.first]) < _DECISIONS_MIN_ES_N0_SHARE * expected
+            if (float(fit.fit.es_n0[fit.first]) < _DECISIONS_MIN_ES_N0_SHARE * expected_es_n0
                     or not 0.0 <= fit.follow() <= _DECISIONS_MAX_FOLLOW):
                 grown = math.sqrt(sigma**2 + (v - m.pilot.v_mps) ** 2 + sigma_bank**2)
                 inflation = grown / sigma if sigma > 0 else 1.0
@@ -1677,7 +1678,6 @@ class FrameMeasurer:
         # the pilot's path's Es/N0 over the pilot, the fit's other paths taken out, against what the measured
         # SNR gives it: noise the windows around the frame did not show (impulses the signal hid from the
         # blanker), or echoes the pilot's own fit did not resolve, which took signal from its path
-        expected_es_n0 = 10 ** (snr_direct_db / 10) * (1 + self.config.rolloff)
         measured = math.nan if shown is None or shown.fit.pilot_es_n0 is None \
             else float(shown.fit.pilot_es_n0[shown.pilot_path])
         if measured > 0:

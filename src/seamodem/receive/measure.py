@@ -49,8 +49,9 @@ class FrameMeasurement:
         False when the recording ends before the frame does.
     echoes : PathFit or None
         ``paths`` with the echoes up to a pilot's length later
-        (:func:`~seamodem.receive.multipath.find_echoes`), when the arrival
-        fit resolved more than one path (None otherwise: not searched).
+        (:func:`~seamodem.receive.multipath.find_echoes`, searched for every
+        frame: ``paths`` itself when it finds none); None when not searched
+        (a measurement made otherwise).
     """
 
     detection: Detection
@@ -130,9 +131,7 @@ def measure_frame(
     # A lone path within the arrival fit's ±12 symbols is searched too: echoes up to a
     # pilot's length behind it overlap its pilot all the same (a bottom echo 2–3 ms late)
     echoes = find_echoes(bb, plan.fs_data, bb_t0_s, config=config, pilot=pilot, paths=paths, eps=fit.v_mps / c)
-    if len(echoes.delays_s) < 2:
-        echoes = None
-    if echoes is not None:
+    if len(echoes.delays_s) > 1:
         eps = direct_path_doppler(
             bb,
             plan.fs_data,

@@ -895,11 +895,17 @@ def fit_whole_frame(
         shape = seg.synthesize(x, inst, scale=1 + eps[p])
         return amps[p] * shape * np.exp(1j * path_phase(config, seg.t_s - delays[p], eps[p], beta[p]))
 
-    def outputs(p, r):
-        """Symbols stripped matched-filter outputs z_k of path p and their time derivatives, drift phase removed."""
-        inst = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx]
-        y, dy = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p], derivative=True)
-        strip = np.exp(-1j * path_phase(config, inst - delays[p], 0.0, beta[p])) * np.conj(x[ref_idx])
+    def outputs(p, r, count=None):
+        """Symbols stripped matched-filter outputs z_k of path p and their time derivatives, drift phase removed;
+        with ``count``, the first ``count`` reference symbols' outputs alone, without the derivatives (None)."""
+        idx = ref_idx if count is None else ref_idx[:count]
+        inst = symbol_instants(config, delays[p], eps[p], beta[p])[idx]
+        y = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p],
+                       derivative=count is None)
+        strip = np.exp(-1j * path_phase(config, inst - delays[p], 0.0, beta[p])) * np.conj(x[idx])
+        if count is not None:
+            return y * strip, None, inst
+        y, dy = y
         return y * strip, dy * strip, inst
 
     def timing_fit(z, dz, p):
@@ -1035,20 +1041,13 @@ def fit_whole_frame(
     # impulses the signal hides from the blanker's robust scale)
     pilot_es_n0 = np.full(n_paths, math.nan)
     if config.n_pilot >= 4 * _PILOT_GAIN_SEGMENTS and np.all(np.asarray(reference)[: config.n_pilot]):
-
-        def pilot_outputs(p, r):
-            inst = symbol_instants(config, delays[p], eps[p], beta[p])[ref_idx[: config.n_pilot]]
-            y = seg.filter(r, inst, scale=1 + eps[p], offset_hz=f0 * eps[p], t_ref_s=delays[p])
-            return y * np.exp(-1j * path_phase(config, inst - delays[p], 0.0, beta[p])) \
-                * np.conj(x[ref_idx[: config.n_pilot]])
-
         unit = np.array([m / a if abs(a) > 0 else np.zeros_like(m) for m, a in zip(models, amps)]) \
             if n_paths > 1 else None
         gains = amps.copy()
         for _ in range(3 if n_paths > 1 else 1):  # Gauss–Seidel over the paths' pilot gains
             for p in range(n_paths):
                 others = 0.0 if n_paths == 1 else np.tensordot(np.delete(gains, p), np.delete(unit, p, axis=0), 1)
-                zp = pilot_outputs(p, seg_bb - others)
+                zp = outputs(p, seg_bb - others, config.n_pilot)[0]
                 gains[p] = np.mean(zp)
                 # the gain segment by segment: a phase the fit's Doppler leaves over the pilot (a fit on
                 # wrong decisions bends it) is not noise to the pilot's own arrival, which fits its own Doppler
