@@ -455,3 +455,49 @@ def test_no_bend_no_image_and_its_delay_stays_merged():
     # a bend bound far beyond a merged echo's: the delay stops at the resolution 1/B
     wide = bend_image(1e-3, 800.0, config=CFG, sound_speed_mps=C)
     assert wide.delay_s == pytest.approx(1 / CFG.bandwidth_hz)
+
+
+def test_in_a_thin_waveguide_a_bend_the_noise_hides_still_counts():
+    # without the depths, at low SNR, a merged image's bend (second order in its delay) stays below the pooled
+    # noise while its bias (first order) is several times the arrival's σ: where the fits show a waveguide thin
+    # against the range, the bound is that of the largest steady bend the coherent mean would not count
+    from seamodem.receive.frame import _COHERENT_THRESHOLD, CURVATURE_POOL_FRAMES, _CurvaturePool
+
+    rng = np.random.default_rng(14)
+    noise = np.linspace(0.5, 1.5, CURVATURE_POOL_FRAMES) * 1e-19
+    thin, plain = _CurvaturePool(), _CurvaturePool()
+    bounds = []
+    for k in range(CURVATURE_POOL_FRAMES):
+        bend = _noisy_bend(rng, 0.0, noise[k])
+        thin.add_fit(_fit(bend, noise[k]), 0, thin=True)
+        plain.add_fit(_fit(bend, noise[k]), 0)
+        bounds.append(thin.delay_s)
+        floor = 1.0 / np.sum(1.0 / noise[: k + 1])
+        if plain.delay_s == 0:  # nothing counted: the hidden bend's bound, its floor the frames' so far
+            assert thin.delay_s == pytest.approx((_COHERENT_THRESHOLD * floor) ** 0.25 / np.sqrt(3), rel=1e-9)
+        assert thin.delay_s >= plain.delay_s
+        assert thin.shown_delay_s == plain.delay_s  # the image's Doppler reads the counted bends alone
+    # the bound shrinks as the frames add up (the floor as 1/K, the bound as K^(-1/4))
+    assert bounds[-1] < 0.7 * bounds[0]
+    # a fit or two of ten in a thin waveguide is not one: the majority of the pooled frames must be
+    mixed = _CurvaturePool()
+    for k in range(CURVATURE_POOL_FRAMES):
+        mixed.add_fit(_fit(_noisy_bend(rng, 0.0, noise[k]), noise[k]), 0, thin=k < 2)
+    assert mixed.hidden_s4() == 0.0
+
+
+def test_a_thin_waveguide_is_a_near_echo_travelling_with_the_direct_path():
+    from types import SimpleNamespace
+
+    from seamodem.receive.frame import thin_waveguide
+
+    def fit(lag_s, gain, dv, sigma_v=0.005):
+        return SimpleNamespace(delays_s=np.array([0.0, lag_s]), amplitudes=np.array([1.0, gain * np.exp(1j)]),
+                               v_mps=np.array([0.5, 0.5 + dv]), sigma_v_mps=np.array([0.003, sigma_v]))
+
+    one_b = 1 / CFG.bandwidth_hz
+    assert thin_waveguide(fit(2.2 * one_b, 0.4, 0.01), 0, CFG)  # the far family: a bottom image 250 µs behind
+    assert not thin_waveguide(fit(4e-3, 0.9, 0.01), 0, CFG)  # a steep channel's surface echo, ms behind
+    assert not thin_waveguide(fit(2.2 * one_b, 0.4, 0.3), 0, CFG)  # near, but not grazing: its own Doppler
+    assert thin_waveguide(fit(2.2 * one_b, 0.4, 0.3, sigma_v=0.1), 0, CFG)  # ... unless its Doppler is that vague
+    assert not thin_waveguide(fit(2.2 * one_b, 0.05, 0.0), 0, CFG)  # a fit's weak path is its noise

@@ -34,7 +34,7 @@ from ..transmit.pilot import pilot_symbols
 from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
 from .demodulate import FrameDecode, demodulate, payload_fields
 from .detect import Detection
-from .echo_geometry import ImageDepths, pooled_depths
+from .echo_geometry import GEOMETRY_MIN_GAIN, GRAZING_DOPPLER_MPS, ImageDepths, pooled_depths
 from .frontend import FrontEndPlan, plan_front_end
 from .impulse import ImpulseBlanker
 from .measure import FrameMeasurement, frame_span_s, impulse_excess, measure_frame
@@ -743,6 +743,37 @@ def _coherent_excess(bends: np.ndarray, noise: np.ndarray) -> float:
     return power - floor if power > _COHERENT_THRESHOLD * floor else 0.0
 
 
+#: a first echo within this many 1/B of the direct path, travelling with it (:func:`thin_waveguide`), is an
+#: image of a waveguide thin against the range: the pulse's reach, within which a fitted path trades delay with
+#: the direct one (as ``EARLIER_NEAREST_B``). The corpus's geometry (400 draws per family): the first resolved
+#: image within it on 0.72 of far recordings (all of which have a merged image), 0.18–0.19 of fading and
+#: impulsive ones (3 % of which have one). At 8/B the fading and impulsive families' whole-frame range went
+#: from RMS err/σ 0.70–0.76 to 0.52–0.70 (two seeds): resolved surface echoes 0.3–0.8 ms behind took it
+_THIN_WAVEGUIDE_B = 3.0
+
+
+def thin_waveguide(wf: WholeFrameFit, first: int, config: FrameConfig) -> bool:
+    """Whether the fit holds an echo of a waveguide thin against the range: a path at least
+    ``GEOMETRY_MIN_GAIN`` of the direct one's, within :data:`_THIN_WAVEGUIDE_B`/B after it, whose Doppler is
+    the direct path's within ``GRAZING_DOPPLER_MPS`` and three of its σ (it travels parallel to it).
+
+    The images of such a waveguide all lie within a few 1/B (method of images: paraxial lags of 2·z·z'/(c·R)),
+    the nearest before the first one resolved; unresolved (within 1/B), it merges with the direct path, and
+    its bias on the arrival is first order in its delay where the channel's bend it shows is second order:
+    at low SNR a bend the pooled noise hides still biases the range several times the arrival's σ (the
+    corpus's far family at 2 dB: a surface image 11 µs behind, no bend counted, ranges 5–12 mm long for σ
+    1.9–3.6 mm). A steep channel's first echo is milliseconds behind, and its paths' Doppler differ."""
+    a0 = abs(complex(wf.amplitudes[first]))
+    if not a0 > 0:
+        return False
+    lags = np.asarray(wf.delays_s, float) - float(wf.delays_s[first])
+    gains = np.abs(np.asarray(wf.amplitudes)) / a0
+    gaps = np.abs(np.asarray(wf.v_mps, float) - float(wf.v_mps[first]))
+    near = ((lags > 0) & (lags <= _THIN_WAVEGUIDE_B / config.bandwidth_hz) & (gains >= GEOMETRY_MIN_GAIN)
+            & (gaps <= GRAZING_DOPPLER_MPS + 3 * np.asarray(wf.sigma_v_mps, float)))
+    return bool(np.any(near))
+
+
 class _CurvaturePool(_FramePool):
     """The direct path's channel curvature over the last decoded frames.
 
@@ -776,17 +807,18 @@ class _CurvaturePool(_FramePool):
 
     def __init__(self, range_share: float = 0.0, hold: int = 0):
         super().__init__()
-        self._bends: collections.deque[tuple[complex, float, float]] = collections.deque(
+        self._bends: collections.deque[tuple[complex, float, float, bool]] = collections.deque(
             maxlen=CURVATURE_POOL_MAX_FRAMES)
         self._range_share = float(range_share)
         # (the bound counted after each of the last ``hold`` fits [s], that fit's range [m]; none kept at 0)
         self._counted: collections.deque[tuple[float, float]] = collections.deque(maxlen=int(hold))
 
     def add_fit(self, wf: WholeFrameFit, first: int, image: MergedImage | None = None,
-                range_m: float = math.nan) -> None:
+                range_m: float = math.nan, thin: bool = False) -> None:
         """Pool the fit's direct-path curvature (``wf.curvature_*``; nothing when it has none), less the bend
         of a surface image whose bias is taken out (``image``), whose variance adds to the noise's; with the
-        frame's range (``range_m``), for the coherent mean over older frames."""
+        frame's range (``range_m``), for the coherent mean over older frames; ``thin``: the fit shows a
+        waveguide thin against the range (:func:`thin_waveguide`), where a bend the noise hides counts."""
         if wf.curvature_s2 is None:
             return
         bend, noise = complex(wf.curvature_s2[first]), float(wf.curvature_noise_s4[first])
@@ -794,7 +826,7 @@ class _CurvaturePool(_FramePool):
             bend, noise = image.residual_bend(bend, noise)
         self.add(abs(bend) ** 2 - noise, noise)
         if cmath.isfinite(bend) and math.isfinite(noise) and noise > 0:
-            self._bends.append((bend, noise, float(range_m)))
+            self._bends.append((bend, noise, float(range_m), bool(thin)))
         if self._counted.maxlen:
             self._counted.append((self._bound_s(), float(range_m)))
 
@@ -805,26 +837,60 @@ class _CurvaturePool(_FramePool):
         counts; each test's false alarm is 1 in 100 pools, so at most 2 in 100 with both)."""
         if not self._bends:
             return 0.0
-        bends, noise, ranges = (np.array(v) for v in zip(*self._bends))
+        bends, noise, ranges, _ = (np.array(v) for v in zip(*self._bends))
         found = _coherent_excess(bends[-CURVATURE_POOL_FRAMES:], noise[-CURVATURE_POOL_FRAMES:])
+        steady = self._steady(ranges)
+        if steady is not None:
+            found = max(found, _coherent_excess(bends[steady], noise[steady]))
+        return found
+
+    def _steady(self, ranges: np.ndarray) -> np.ndarray | None:
+        """The pooled frames whose range is within the steady bend's share of the newest one's, when they are
+        more than :data:`CURVATURE_POOL_FRAMES`, else None."""
         newest = ranges[-1]
         if self._range_share > 0 and math.isfinite(newest):
             steady = np.abs(ranges - newest) <= self._range_share * newest  # (NaN ranges are not)
             if np.count_nonzero(steady) > CURVATURE_POOL_FRAMES:
-                found = max(found, _coherent_excess(bends[steady], noise[steady]))
-        return found
+                return steady
+        return None
+
+    def hidden_s4(self) -> float:
+        """The largest steady bend the coherent mean would not count, |c|² at :data:`_COHERENT_THRESHOLD`
+        times its noise expectation [s⁴], when most of the frames it pools show a thin waveguide
+        (``add_fit(thin=…)``), else 0: over the frames the coherent mean pools, the more of them when the
+        range has stayed steady (its floor the smaller).
+
+        In such a waveguide an image merged with the direct path is the rule, not the exception (the corpus's
+        far family: every recording, 3–52 µs behind), and its bias is first order in its delay where its bend
+        is second order: a bend below the noise is no sign that the bias is below the arrival's σ."""
+        if not self._bends:
+            return 0.0
+        _, noise, ranges, thin = (np.array(v) for v in zip(*self._bends))
+        steady = self._steady(ranges)
+        pick = steady if steady is not None else slice(-CURVATURE_POOL_FRAMES, None)
+        noise, thin = noise[pick], thin[pick]
+        if not 2 * np.count_nonzero(thin) > len(thin):
+            return 0.0
+        return _COHERENT_THRESHOLD / float(np.sum(1.0 / noise))
 
     def _bound_s(self) -> float:
         bound4 = max(self.standing_mean(3.0), self.coherent_s4())
         return bound4**0.25 / math.sqrt(3)  # σ of a uniform spread over the bound
 
     @property
-    def delay_s(self) -> float:
+    def shown_delay_s(self) -> float:
+        """The bias σ [s] of the bends counted (held with ``hold``), a bend the noise hides left out."""
         now = self._bound_s()
         newest = self._counted[-1][1] if self._counted else math.nan
         if not math.isfinite(newest):
             return now
         return max([now, *(d for d, r in self._counted if abs(r - newest) <= self._range_share * newest)])
+
+    @property
+    def delay_s(self) -> float:
+        """The arrival's bias σ [s]: :attr:`shown_delay_s`, or that of the bend the noise hides now
+        (:meth:`hidden_s4`: not held, its floor only falls as the frames add up) when larger."""
+        return max(self.shown_delay_s, self.hidden_s4() ** 0.25 / math.sqrt(3))
 
 
 #: frames further apart than this [s] are not compared for the slow fading (``FrameMeasurer._frame_to_frame``)
@@ -1565,7 +1631,9 @@ class FrameMeasurer:
         image = self.echo_image(range_m)
         if image is not None:
             return image
-        return bend_image(self.pooled_merge_delay_s, range_m, config=self.config, sound_speed_mps=s.sound_speed_mps,
+        # (of a bend counted: one the noise may hide is the range's cover, not an image's Doppler)
+        return bend_image(self._curvature_pool.shown_delay_s, range_m, config=self.config,
+                          sound_speed_mps=s.sound_speed_mps,
                           wave_amplitude_m=s.wave_amplitude_m, wave_period_s=s.wave_period_s)
 
     def _doppler(self, m: FrameMeasurement, dec: FrameDecode | None, bb, t0_s: float, fs: float,
@@ -1628,7 +1696,9 @@ class FrameMeasurer:
             # the channel's bend, from decoded frames only: a fit on decisions at low SNR bends more than the
             # noise its residual gives (a single path at −3.5 dB: |c|² 3.3 times it over 80 fits; the corpus's
             # single paths at −2 dB took 18–34 mm of range σ from it)
-            self._curvature_pool.add_fit(fit.fit, fit.first, explained, range_m)
+            self._curvature_pool.add_fit(fit.fit, fit.first, explained, range_m,
+                                         thin=not self.images_modelled
+                                         and thin_waveguide(fit.fit, fit.first, self.config))
             echoes = fit_echoes(fit.fit, fit.first)
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
