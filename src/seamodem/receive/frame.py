@@ -777,7 +777,7 @@ def thin_waveguide(wf: WholeFrameFit, first: int, config: FrameConfig) -> bool:
 class _CurvaturePool(_FramePool):
     """The direct path's channel curvature over the last decoded frames.
 
-    Two means, the larger counted (:attr:`delay_s`, the arrival's bias bound):
+    Two means, the larger counted (:attr:`shown_delay_s`, the arrival's bias bound):
 
     - the fourth powers (|``WholeFrameFit.curvature_s2``|² less their noise expectation
       ``curvature_noise_s4``: unbiased, with that noise as their σ) over the last
@@ -794,6 +794,10 @@ class _CurvaturePool(_FramePool):
       The same mean also over up to :data:`CURVATURE_POOL_MAX_FRAMES` older frames while the range stays
       within :func:`steady_bend_range_share` of the newest frame's (the bend keeps its phase there): on a
       long recording, a bend at 1/16 of one frame's noise expectation is counted once about 100 frames are in.
+
+    And where the pooled fits show a waveguide thin against the range (:func:`thin_waveguide`), the bound of
+    the largest steady bend the coherent mean would not count (:meth:`hidden_s4`) is the floor of
+    :attr:`delay_s`, the range's; :attr:`shown_delay_s`, the bends counted alone, is the Doppler's.
 
     Fits on decisions do not feed it: at −3.5 dB their |c|² is 3.3 times the noise expectation the
     residual gives (80 fits on a single path), which would read as a bend.
