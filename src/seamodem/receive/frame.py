@@ -763,14 +763,14 @@ def thin_waveguide(wf: WholeFrameFit, first: int, config: FrameConfig) -> bool:
     at low SNR a bend the pooled noise hides still biases the range several times the arrival's σ (the
     corpus's far family at 2 dB: a surface image 11 µs behind, no bend counted, ranges 5–12 mm long for σ
     1.9–3.6 mm). A steep channel's first echo is milliseconds behind, and its paths' Doppler differ."""
-    a0 = abs(complex(wf.amplitudes[first]))
-    if not a0 > 0:
+    echoes = fit_echoes(wf, first)
+    if echoes is None:
         return False
-    lags = np.asarray(wf.delays_s, float) - float(wf.delays_s[first])
-    gains = np.abs(np.asarray(wf.amplitudes)) / a0
-    gaps = np.abs(np.asarray(wf.v_mps, float) - float(wf.v_mps[first]))
+    lags, gains = echoes
+    others = np.arange(len(wf.delays_s)) != first
+    gaps = np.abs(np.asarray(wf.v_mps, float)[others] - float(wf.v_mps[first]))
     near = ((lags > 0) & (lags <= _THIN_WAVEGUIDE_B / config.bandwidth_hz) & (gains >= GEOMETRY_MIN_GAIN)
-            & (gaps <= GRAZING_DOPPLER_MPS + 3 * np.asarray(wf.sigma_v_mps, float)))
+            & (gaps <= GRAZING_DOPPLER_MPS + 3 * np.asarray(wf.sigma_v_mps, float)[others]))
     return bool(np.any(near))
 
 
