@@ -96,11 +96,15 @@ class MeasurementRecord:
         Std of v_r_mps [m/s]: whole-frame fit, the deviation of its segments'
         phases, at least the known-signal CRLB, with the direct path's
         log-amplitude rate (fading, a beating echo), a drift beyond 0.5 m/s²
-        and its gap to the pilot bank beyond 3 combined σ; tone, its CRLB at
+        and its gap to the pilot bank beyond 3 combined σ unless the tone sides
+        with the fit (``frame.bank_gap_sigmas_mps``); tone, its CRLB at
         the measured C/N0, inflated by its disagreement with the pilot bank
         (and with a fit on decisions set aside) when that exceeds 3 combined σ.
     sigma_v_r_bank_mps : float
-        Std of v_r_bank_mps from the pilot-Doppler CRLB at the measured SNR [m/s].
+        Std of v_r_bank_mps [m/s]: the pilot-Doppler CRLB at the measured SNR,
+        the pull of echoes over the pilot and, on rows with a whole-frame fit,
+        the channel's wander that fit shows (fading, a merged image's Doppler)
+        and the bank's gap to the fit beyond 3 combined σ.
     tone_c_n0_dbhz : float
         Measured tone C/N0 [dB-Hz].
     two_way : bool
