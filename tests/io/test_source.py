@@ -138,6 +138,20 @@ def test_mat_files_and_flac_read_as_the_wav(tmp_path, stereo):
         open_recording(tmp_path / "v5.mat").check_channel(2)
 
 
+
+def test_a_sample_rate_no_acoustic_recording_has_is_refused_naming_the_file(tmp_path, stereo):
+    """A .mat v7.3 whose rate's last byte a flipped bit turned into 5.8e28 Hz sized arrays beyond memory
+    ("Maximum allowed size exceeded", no file named: found by tests/io/test_fuzz_readers.py)."""
+    path, x = stereo
+    with h5py.File(tmp_path / "v73.mat", "w", userblock_size=512) as f:
+        f["x"] = x.T
+        f["fs"] = np.array([[5.8e28]])
+    with pytest.raises(InputFileError, match=r"v73.mat: its sample rate, 5.8e\+28 Hz, is above 1e\+08 Hz"):
+        open_recording(tmp_path / "v73.mat")
+    assert open_recording(tmp_path / "v73.mat", sample_rate_hz=FS).sample_rate_hz == FS  # given: used
+    with pytest.raises(InputFileError, match=r"sample-rate: 1e\+09 Hz is above"):
+        open_recording(path, sample_rate_hz=1e9)
+
 def test_notes_are_warned_once_when_opened(tmp_path, stereo):
     path, _ = stereo
     with warnings.catch_warnings(record=True) as caught:

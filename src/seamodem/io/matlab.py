@@ -248,6 +248,11 @@ def _open_mat73(path: Path, variable: str | None) -> MatFile:
     return MatFile("mat73", n, n_ch, in_file, level, reader=reader)
 
 
+#: the highest sample rate [Hz] taken for an acoustic recording: hydrophone ADCs run at up to a few MHz; a
+#: damaged .mat's rate (a flipped bit: 5.8e28 Hz) would otherwise size arrays beyond memory
+MAX_SAMPLE_RATE_HZ = 100e6
+
+
 def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: list[str]) -> float:
     """The sample rate: the one given (a note when the file's differs), else the file's.
 
@@ -270,11 +275,14 @@ def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: 
     Raises
     ------
     InputFileError
-        A given rate that is not positive; no rate at all.
+        A given rate that is not positive; no rate at all; a rate above :data:`MAX_SAMPLE_RATE_HZ`.
     """
     if given is not None:
         if not (math.isfinite(given) and given > 0):
             raise InputFileError(f"sample-rate: must be a positive number of Hz, got {given!r}")
+        if given > MAX_SAMPLE_RATE_HZ:
+            raise InputFileError(f"sample-rate: {given:g} Hz is above {MAX_SAMPLE_RATE_HZ:g} Hz, "
+                                 "not an acoustic recording's")
         if in_file is not None and abs(in_file - given) > 1e-9 * given:
             notes.append(f"{path}: the file says {in_file:g} Hz, the command line {given:g} Hz; using {given:g} Hz")
         return float(given)
@@ -282,4 +290,7 @@ def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: 
         raise InputFileError(
             f"{path}: no sample rate in the file (a scalar named {', '.join(MAT_RATE_NAMES[:3])}, ...); give --sample-rate"
         )
+    if in_file > MAX_SAMPLE_RATE_HZ:
+        raise InputFileError(f"{path}: its sample rate, {in_file:g} Hz, is above {MAX_SAMPLE_RATE_HZ:g} Hz "
+                             "(a damaged file?); give --sample-rate")
     return in_file
