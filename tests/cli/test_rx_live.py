@@ -256,6 +256,7 @@ def test_closed_stdout_epipe_ends_with_exit_4(rec):
     (b"", [], "stdin: the stream ended before any byte arrived (no audio)"),
     (b"\0" * 100, ["--raw", "S8"], "raw: format must be one of S16_LE"),
     (b"\0" * 100, ["--raw", "S16_LE"], "sample-rate: raw PCM needs its rate > 0"),
+    (b"\0" * 100, ["--raw", "S16_LE", "--sample-rate", "1e9"], "sample-rate: a sample rate of 1e+09 Hz is above"),
     (b"\0" * 100, ["--sample-rate", "48000"], "--sample-rate and --channels describe raw PCM"),
 ])
 def test_bad_streams_are_one_line_exit_2_no_output(rec, tmp_path, data, args, message):

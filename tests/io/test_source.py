@@ -146,11 +146,33 @@ def test_a_sample_rate_no_acoustic_recording_has_is_refused_naming_the_file(tmp_
     with h5py.File(tmp_path / "v73.mat", "w", userblock_size=512) as f:
         f["x"] = x.T
         f["fs"] = np.array([[5.8e28]])
-    with pytest.raises(InputFileError, match=r"v73.mat: its sample rate, 5.8e\+28 Hz, is above 1e\+08 Hz"):
+    with pytest.raises(InputFileError, match=r"v73.mat: a sample rate of 5.8e\+28 Hz is above 1e\+08 Hz"):
         open_recording(tmp_path / "v73.mat")
     assert open_recording(tmp_path / "v73.mat", sample_rate_hz=FS).sample_rate_hz == FS  # given: used
-    with pytest.raises(InputFileError, match=r"sample-rate: 1e\+09 Hz is above"):
+    with pytest.raises(InputFileError, match=r"sample-rate: a sample rate of 1e\+09 Hz is above"):
         open_recording(path, sample_rate_hz=1e9)
+
+
+def test_every_stream_source_shares_the_rate_bound(tmp_path, stereo):
+    """Pipes, live streams and sound cards refuse the rate a file would (they checked only > 0 before)."""
+    from seamodem.io.device import open_device
+    from seamodem.io.live import open_live
+
+    path, _ = stereo
+    damaged = bytearray(_wav_bytes(path))
+    damaged[24:28] = (500_000_000).to_bytes(4, "little")  # the fmt chunk's rate: 500 MHz
+    (tmp_path / "damaged.wav").write_bytes(bytes(damaged))
+    with pytest.raises(InputFileError, match=r"pipe: a sample rate of 5e\+08 Hz is above 1e\+08 Hz.*damaged header"):
+        open_stream(io.BytesIO(bytes(damaged)), name="pipe")
+    with pytest.raises(InputFileError, match=r"damaged.wav: a sample rate of 5e\+08 Hz .*damaged WAV header"):
+        open_live(str(tmp_path / "damaged.wav"))
+    for opened in (lambda: open_stream(io.BytesIO(b"\0" * 64), sample_rate_hz=1e9, n_channels=1),
+                   lambda: open_live(str(path), raw_format="S16_LE", sample_rate_hz=1e9),
+                   lambda: open_device("0", sample_rate_hz=1e9)):
+        with pytest.raises(InputFileError, match=r"^sample-rate: a sample rate of 1e\+09 Hz is above 1e\+08 Hz"):
+            opened()
+    assert open_stream(io.BytesIO(_wav_bytes(path))).sample_rate_hz == FS  # the bound is not in the way
+
 
 def test_notes_are_warned_once_when_opened(tmp_path, stereo):
     path, _ = stereo

@@ -20,6 +20,7 @@ import threading
 import numpy as np
 
 from ..errors import InputFileError
+from .matlab import refuse_huge_rate
 from .source import RecordingSource, columns
 
 __all__ = ["DeviceSource", "open_device", "BUFFER_S"]
@@ -139,6 +140,7 @@ def open_device(device: str, *, sample_rate_hz: float | None, n_channels: int = 
     """
     if sample_rate_hz is None or not (np.isfinite(sample_rate_hz) and sample_rate_hz > 0):
         raise InputFileError(f"sample-rate: a sound card needs its capture rate > 0 [Hz], got {sample_rate_hz!r}")
+    refuse_huge_rate(sample_rate_hz, "sample-rate")
     sd = _sounddevice()
     dev = int(device) if str(device).isdigit() else device
     try:

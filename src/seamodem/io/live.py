@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputFileError
+from .matlab import refuse_huge_rate
 from .source import RecordingSource, columns
 
 __all__ = ["RAW_FORMATS", "PcmFormat", "LiveSource", "is_live_input", "open_live"]
@@ -243,6 +244,7 @@ def _wav_format(fmt: bytes, name: str) -> tuple[PcmFormat, int, float]:
                              "(16-, 24-, 32-bit PCM or 32-, 64-bit float)")
     if channels < 1 or rate <= 0:
         raise InputFileError(f"{name}: WAV header gives {channels} channel(s) at {rate} Hz")
+    refuse_huge_rate(rate, name, " (a damaged WAV header?)")
     return pcm, channels, float(rate)
 
 
@@ -393,6 +395,7 @@ def open_live(
             raise InputFileError(f"raw: format must be one of {', '.join(RAW_FORMATS)}, got {raw_format!r}")
         if sample_rate_hz is None or not (np.isfinite(sample_rate_hz) and sample_rate_hz > 0):
             raise InputFileError(f"sample-rate: raw PCM needs its rate > 0 [Hz], got {sample_rate_hz!r}")
+        refuse_huge_rate(sample_rate_hz, "sample-rate")
         if n_channels is not None and n_channels < 1:
             raise InputFileError(f"channels: must be >= 1, got {n_channels}")
     if stall_timeout_s is not None and not (np.isfinite(stall_timeout_s) and stall_timeout_s > 0):

@@ -253,6 +253,36 @@ def _open_mat73(path: Path, variable: str | None) -> MatFile:
 MAX_SAMPLE_RATE_HZ = 100e6
 
 
+def refuse_huge_rate(rate_hz: float, what: str, hint: str = "") -> None:
+    """Raise when ``rate_hz`` is above :data:`MAX_SAMPLE_RATE_HZ`, the one bound every source shares.
+
+    Parameters
+    ----------
+    rate_hz : float
+        A positive, finite rate [Hz] (checked by the caller, whose message names its option).
+    what : str
+        What gave it: a file, ``stdin``, ``sample-rate``; it opens the message.
+    hint : str
+        Appended to the message, e.g. ``"; give --sample-rate"``.
+
+    Raises
+    ------
+    InputFileError
+        Above :data:`MAX_SAMPLE_RATE_HZ`.
+
+    Examples
+    --------
+    >>> refuse_huge_rate(96000.0, "x.wav")
+    >>> refuse_huge_rate(5.8e28, "x.mat")
+    Traceback (most recent call last):
+    ...
+    seamodem.errors.InputFileError: x.mat: a sample rate of 5.8e+28 Hz is above 1e+08 Hz, not an acoustic recording's
+    """
+    if rate_hz > MAX_SAMPLE_RATE_HZ:
+        raise InputFileError(f"{what}: a sample rate of {rate_hz:g} Hz is above {MAX_SAMPLE_RATE_HZ:g} Hz, "
+                             f"not an acoustic recording's{hint}")
+
+
 def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: list[str]) -> float:
     """The sample rate: the one given (a note when the file's differs), else the file's.
 
@@ -280,9 +310,7 @@ def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: 
     if given is not None:
         if not (math.isfinite(given) and given > 0):
             raise InputFileError(f"sample-rate: must be a positive number of Hz, got {given!r}")
-        if given > MAX_SAMPLE_RATE_HZ:
-            raise InputFileError(f"sample-rate: {given:g} Hz is above {MAX_SAMPLE_RATE_HZ:g} Hz, "
-                                 "not an acoustic recording's")
+        refuse_huge_rate(given, "sample-rate")
         if in_file is not None and abs(in_file - given) > 1e-9 * given:
             notes.append(f"{path}: the file says {in_file:g} Hz, the command line {given:g} Hz; using {given:g} Hz")
         return float(given)
@@ -290,7 +318,5 @@ def resolve_rate(path: Path, in_file: float | None, given: float | None, notes: 
         raise InputFileError(
             f"{path}: no sample rate in the file (a scalar named {', '.join(MAT_RATE_NAMES[:3])}, ...); give --sample-rate"
         )
-    if in_file > MAX_SAMPLE_RATE_HZ:
-        raise InputFileError(f"{path}: its sample rate, {in_file:g} Hz, is above {MAX_SAMPLE_RATE_HZ:g} Hz "
-                             "(a damaged file?); give --sample-rate")
+    refuse_huge_rate(in_file, str(path), " (a damaged file?); give --sample-rate")
     return in_file

@@ -13,6 +13,7 @@ from typing import IO
 import numpy as np
 
 from ..errors import InputFileError
+from .matlab import refuse_huge_rate
 from .source import RecordingSource, columns, clip_level
 from .wav import SUBTYPES
 
@@ -119,12 +120,19 @@ def open_stream(
                 raise InputFileError(f"{name}: raw sample format must be one of {', '.join(SUBTYPES)}, got {fmt!r}")
             if not (math.isfinite(sample_rate_hz) and sample_rate_hz > 0) or int(n_channels) < 1:
                 raise InputFileError(f"{name}: a raw stream needs a positive rate and channels >= 1")
+            refuse_huge_rate(sample_rate_hz, "sample-rate")
             kwargs = dict(samplerate=int(round(sample_rate_hz)), channels=int(n_channels), subtype=SUBTYPES[fmt],
                           format="RAW", endian="LITTLE")
             sound = soundfile.SoundFile(src, closefd=closefd, **kwargs) if isinstance(src, int) else \
                 soundfile.SoundFile(src, **kwargs)
     except (soundfile.LibsndfileError, RuntimeError) as exc:
         raise InputFileError(f"{name} is not a readable audio stream: {exc}") from None
+    if sample_rate_hz is None:
+        try:
+            refuse_huge_rate(sound.samplerate, name, " (a damaged header?)")
+        except InputFileError:
+            sound.close()
+            raise
     out = StreamSource(sound, name=name)
     if sample_rate_hz is not None:
         out.sample_rate_hz = float(sample_rate_hz)
