@@ -7,7 +7,9 @@ weaker ones). The bank, from the pilot alone (a Doppler resolution of 2.3 m/s), 
 whole-frame fit, its gap gave right fits (0.1–0.9 mm/s off) σ's of 40–110 mm/s. A two-path analytic
 channel (one echo, constant Doppler) pulls the bank by 1σ only: the corpus's channel is the test.
 Since session 31 the echoes over the pilot are searched for every frame (``measure_frame``), also where
-the arrival fit within ±12 symbols held a lone path, and the bank's Doppler is fitted with them.
+the arrival fit within ±12 symbols held a lone path, and the bank's Doppler is fitted with them. Since
+session 34 the bank's σ column takes its error from its gaps to the last decoded frames' fits
+(``FrameMeasurer.bank_excess_mps``), the echoes' bound only until three frames are in.
 """
 
 from __future__ import annotations
@@ -33,6 +35,11 @@ def test_the_bank_pulled_by_echoes_neither_lies_nor_inflates_the_fit():
     assert np.all(np.abs(bank_err) < 0.07), bank_err
     # the bank's own σ covers it
     assert np.all(np.abs(bank_err) <= 3 * bank_sig), (bank_err, bank_sig)
+    # at its scale once three decoded frames' gaps to their fits are in (frame.BANK_GAP_MIN_FRAMES): the
+    # bound of the echo's pull, b·|Δv|/√3 (78–167 mm/s here), held errors of 3–52 mm/s at RMS err/σ 0.37;
+    # the gaps' 27–34 mm/s hold them at 1.03
+    z = bank_err[2:] / bank_sig[2:]
+    assert 0.7 <= np.sqrt(np.mean(z**2)) <= 1.5, (bank_err, bank_sig)
     # and the fit keeps its own scale: within 3σ, σ of mm/s
     assert np.all(np.abs(err) <= 3 * sig), (err, sig)
     assert np.max(sig) < 0.01, sig

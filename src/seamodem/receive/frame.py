@@ -159,6 +159,10 @@ _DECISIONS_MAX_FOLLOW = 1.5
 #: decoded frames whose echoes pull a later undecoded frame's pilot arrival (``pooled_pilot_pull_s``)
 _ECHO_POOL_FRAMES = 5
 
+#: the pilot bank's σ column takes the error its gaps to the last decoded frames' fits show once this many are in
+#: (``FrameMeasurer.bank_excess_mps``; before, the bound of the echoes a frame's fit shows over the pilot)
+BANK_GAP_MIN_FRAMES = 3
+
 
 def direct_path_share(m: FrameMeasurement) -> float:
     """The first path's share of the power of the paths resolved in the pilot (1 for a lone path).
@@ -1012,6 +1016,11 @@ def bank_echo_sigma_mps(wf: WholeFrameFit, first: int, config: FrameConfig) -> f
     family, an echo 0.6 of the direct path 3.5 ms behind, 0.2–0.46 m/s away: the bank 0.05–1.0 of that
     off, 4–6 of its CRLB). Each such path of the fit adds (b·Δv)²; the σ is that of a uniform spread
     over the sum's root, /√3. 0 with no such path.
+
+    A bound, not a measure: the bank is fitted with its echoes, and the corpus's steep family had it 17–64
+    mm/s RMS off where this gave 80–99 mm/s. It is the bank's σ in the gap test of the whole-frame fit, and
+    in its own σ column only until :data:`BANK_GAP_MIN_FRAMES` decoded frames' gaps to their fits measure
+    that error (``FrameMeasurer.bank_excess_mps``).
     """
     span = config.n_pilot * config.symbol_period_s
     a0 = abs(complex(wf.amplitudes[first]))
@@ -1061,6 +1070,7 @@ def fit_echoes(wf: WholeFrameFit, first: int) -> tuple[np.ndarray, np.ndarray] |
     others = np.arange(len(wf.delays_s)) != first
     return (np.asarray(wf.delays_s, float)[others] - float(wf.delays_s[first]),
             np.abs(np.asarray(wf.amplitudes)[others]) / a0)
+
 
 
 def unmodelled_pull_s(lags_s: np.ndarray, gains: np.ndarray, modelled_s: np.ndarray, config: FrameConfig,
@@ -1368,6 +1378,10 @@ class FrameMeasurer:
         # the pilot's path's Es/N0 that the measured SNR gives it, over the one the last frames' whole-frame
         # fits measured over their pilots: a frame without a fit of its own
         self._pilot_noise_ratios: collections.deque[float] = collections.deque(maxlen=_ECHO_POOL_FRAMES)
+        # the pilot bank's Doppler against the whole frame's in the last decoded frames: its squared gap less the
+        # two estimates' noise variances (unbiased, not clipped) [m²/s²]: what this channel adds to the bank's
+        # error (echoes over the pilot with their own Doppler, impulses), for the bank's σ column
+        self._bank_gaps: collections.deque[float] = collections.deque(maxlen=_ECHO_POOL_FRAMES)
         self._last_amplitude: tuple[float, float, float] | None = None
         #: of the last record: the channel shape's σ its arrival took [s], metres per second of arrival σ in
         #: its range σ (c, or c/2 two-way), and its whole-frame fit's own fading rate, the rate its v_r took [Hz]
@@ -1386,6 +1400,13 @@ class FrameMeasurer:
         """The direct path's log-amplitude rate pooled over recent decoded frames, within them and from frame
         to frame (the larger) [Hz]."""
         return max(self._fade_pool.rate_hz, self._slow_fade_pool.rate_hz)
+
+    def bank_excess_mps(self, bound_mps: float) -> float:
+        """The pilot bank's Doppler error beyond its noise [m/s], as the last decoded frames' gaps to their
+        whole-frame fits showed it (the root of their mean, clipped at 0); ``bound_mps`` (a bound the frame's
+        own fit gives) while fewer than :data:`BANK_GAP_MIN_FRAMES` frames are in, the larger then."""
+        shown = math.sqrt(max(0.0, float(np.mean(self._bank_gaps)))) if self._bank_gaps else 0.0
+        return shown if len(self._bank_gaps) >= BANK_GAP_MIN_FRAMES else max(shown, bound_mps)
 
     def _frame_to_frame(self, wf: WholeFrameFit, first: int, range_m: float) -> None:
         """Pool the direct path's log-amplitude rate from the last decoded frame to this one.
@@ -1833,13 +1854,22 @@ class FrameMeasurer:
             # (the bank's σ with the pull of the echoes the fit sees over the pilot: without it, the steep
             # family's decoded rows took 40–110 mm/s of σ from a bank 0.1 m/s off, their error 0.1–0.9 mm/s)
             # (the tone referees the gap: bank_gap_sigmas_mps; the bank's own σ column covers it too)
-            sigma_bank = math.hypot(sigma_bank, bank_echo_sigma_mps(wf, first, self.config))
+            sigma_bank_noise, echo_bound = sigma_bank, bank_echo_sigma_mps(wf, first, self.config)
+            sigma_fit_noise = float(wf.sigma_v_mps[first]) * inflation
+            sigma_bank = math.hypot(sigma_bank, echo_bound)
+            sigma_pre_gap = sigma
             sigma, sigma_bank = bank_gap_sigmas_mps(v, sigma, float(m.pilot.v_mps), sigma_bank, v_tone, sigma_tone)
-            # the bank's own column: the channel's wander the fit shows (fading, a merged image's Doppler) is
-            # no Doppler, and moves the pilot's 23 ms as it moves the frame (the corpus's far family: banks
-            # 20–35 mm/s off with σ 6–8 mm/s, the fit's σ 8.5 mm/s of these terms). Not in the gap above: the
-            # two estimates share it
-            sigma_bank_column = math.sqrt(sigma_bank**2 + sigma_v_un**2 + sigma_image**2)
+            # the bank's own column. Its error beyond its noise, measured: the last decoded frames' gaps to their
+            # fits (this one's in), where the echoes' bound above is a bound (the corpus's steep family: banks
+            # 17–64 mm/s RMS off against a bound of 80–99 mm/s); the bound while fewer frames are in
+            if source == "whole_frame":
+                self._bank_gaps.append((v - float(m.pilot.v_mps)) ** 2 - sigma_fit_noise**2 - sigma_bank_noise**2)
+            column = math.hypot(sigma_bank_noise, self.bank_excess_mps(echo_bound))
+            _, column = bank_gap_sigmas_mps(v, sigma_pre_gap, float(m.pilot.v_mps), column, v_tone, sigma_tone)
+            # and the channel's wander the fit shows (fading, a merged image's Doppler), which is no Doppler and
+            # moves the pilot's 23 ms as it moves the frame (the corpus's far family: banks 20–35 mm/s off with
+            # σ 6–8 mm/s, the fit's σ 8.5 mm/s of these terms). Not in the gaps: the two estimates share it
+            sigma_bank_column = math.sqrt(column**2 + sigma_v_un**2 + sigma_image**2)
             # (a fit on decisions has the tone as its referee already, above)
             sigma_2c = two_carrier_sigma_mps(wf, first, v_tone, sigma_tone_noise, sigma, self.config,
                                              sound_speed_mps=c) \
@@ -1864,13 +1894,15 @@ class FrameMeasurer:
                            float(wf.delays_s[pilot_path] - wf.delays_s[first]), near_gap)
         # without a fit, the pilot's arrival: the channel's bend pooled over recent frames is this frame's too
         sigma_tau_unmodelled = max(sigma_tau_rejected, _K_MERGE * pooled_merge)
+        # the bank's own column without a fit: its noise and the error the last decoded frames' gaps showed
+        column = math.hypot(sigma_bank, self.bank_excess_mps(0.0))
         if not math.isfinite(v_tone):  # no tone (frame cut just after its pilot): the bank
-            return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=sigma_bank, sigma_bank=sigma_bank,
+            return dict(v_r_mps=float(m.pilot.v_mps), sigma_v_r_mps=column, sigma_bank=column,
                         sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, pilot_noise_ratio=noise_ratio,
                         v_r_source="bank",
                         v_r_tone_mps=v_tone, n_paths=len(m.paths.delays_s),
                         sigma_tau_unmodelled=sigma_tau_unmodelled), None
-        return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=sigma_bank,
+        return dict(v_r_mps=v_tone, sigma_v_r_mps=sigma_tone_gap, sigma_bank=column,
                     sigma_tau_pilot_pull=pilot_pull, pilot_excess=pilot_excess, pilot_noise_ratio=noise_ratio,
                     v_r_source="tone",
                     v_r_tone_mps=v_tone, tone_multipath_biased=bool(gap > 3 * math.hypot(sigma_tone, sigma_bank)),

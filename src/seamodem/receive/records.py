@@ -101,10 +101,13 @@ class MeasurementRecord:
         the measured C/N0, inflated by its disagreement with the pilot bank
         (and with a fit on decisions set aside) when that exceeds 3 combined σ.
     sigma_v_r_bank_mps : float
-        Std of v_r_bank_mps [m/s]: the pilot-Doppler CRLB at the measured SNR,
-        the pull of echoes over the pilot and, on rows with a whole-frame fit,
-        the channel's wander that fit shows (fading, a merged image's Doppler)
-        and the bank's gap to the fit beyond 3 combined σ.
+        Std of v_r_bank_mps [m/s]: the pilot-Doppler CRLB at the measured SNR
+        and the bank's error beyond it that its gaps to the last decoded
+        frames' whole-frame fits show (their mean square less both noises; the
+        bound of the pull of echoes over the pilot until three are in) and, on
+        rows with a whole-frame fit, the channel's wander that fit shows
+        (fading, a merged image's Doppler) and the bank's gap to the fit beyond
+        3 combined σ.
     tone_c_n0_dbhz : float
         Measured tone C/N0 [dB-Hz].
     two_way : bool
