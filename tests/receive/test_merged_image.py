@@ -493,7 +493,8 @@ def test_a_thin_waveguide_is_a_near_echo_travelling_with_the_direct_path():
 
     def fit(lag_s, gain, dv, sigma_v=0.005):
         return SimpleNamespace(delays_s=np.array([0.0, lag_s]), amplitudes=np.array([1.0, gain * np.exp(1j)]),
-                               v_mps=np.array([0.5, 0.5 + dv]), sigma_v_mps=np.array([0.003, sigma_v]))
+                               v_mps=np.array([0.5, 0.5 + dv]), sigma_v_mps=np.array([0.003, sigma_v]),
+                               sigma_delay_s=np.array([1e-6, 1e-6]))
 
     one_b = 1 / CFG.bandwidth_hz
     assert thin_waveguide(fit(2.2 * one_b, 0.4, 0.01), 0, CFG)  # the far family: a bottom image 250 µs behind

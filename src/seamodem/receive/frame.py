@@ -804,10 +804,9 @@ def thin_waveguide(wf: WholeFrameFit, first: int, config: FrameConfig) -> bool:
     if echoes is None:
         return False
     lags, gains = echoes
-    others = np.arange(len(wf.delays_s)) != first
-    gaps = np.abs(np.asarray(wf.v_mps, float)[others] - float(wf.v_mps[first]))
+    dv, sigma_v, _ = fit_echo_dopplers(wf, first)
     near = ((lags > 0) & (lags <= _THIN_WAVEGUIDE_B / config.bandwidth_hz) & (gains >= GEOMETRY_MIN_GAIN)
-            & (gaps <= GRAZING_DOPPLER_MPS + 3 * np.asarray(wf.sigma_v_mps, float)[others]))
+            & (np.abs(dv) <= GRAZING_DOPPLER_MPS + 3 * sigma_v))
     return bool(np.any(near))
 
 
@@ -1070,6 +1069,14 @@ def fit_echoes(wf: WholeFrameFit, first: int) -> tuple[np.ndarray, np.ndarray] |
     others = np.arange(len(wf.delays_s)) != first
     return (np.asarray(wf.delays_s, float)[others] - float(wf.delays_s[first]),
             np.abs(np.asarray(wf.amplitudes)[others]) / a0)
+
+
+def fit_echo_dopplers(wf: WholeFrameFit, first: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A whole-frame fit's paths other than ``first``, in :func:`fit_echoes`' order: their Doppler less its
+    [m/s], that Doppler's σ [m/s] and their arrivals' σ [s]."""
+    others = np.arange(len(wf.delays_s)) != first
+    return (np.asarray(wf.v_mps, float)[others] - float(wf.v_mps[first]),
+            np.asarray(wf.sigma_v_mps, float)[others], np.asarray(wf.sigma_delay_s, float)[others])
 
 
 
@@ -1760,11 +1767,8 @@ class FrameMeasurer:
             echoes = fit_echoes(fit.fit, fit.first)
             if echoes is not None:
                 self._decoded_echoes.append(echoes)
-                others = np.arange(len(fit.fit.delays_s)) != fit.first
                 self._geometry_count += 1
-                self._geometry_echoes.append(echoes + (
-                    np.asarray(fit.fit.v_mps)[others] - float(fit.fit.v_mps[fit.first]),
-                    np.asarray(fit.fit.sigma_v_mps)[others], np.asarray(fit.fit.sigma_delay_s)[others]))
+                self._geometry_echoes.append(echoes + fit_echo_dopplers(fit.fit, fit.first))
         pooled_merge = self.pooled_merge_delay_s
         inflation = 1.0
         # the direct path's Es/N0 that the measured SNR gives it
