@@ -116,7 +116,7 @@ def _scores(err: np.ndarray, sig: np.ndarray) -> dict:
 
 def _calibration_lines(rows: list[dict], what: str, scale: float, unit: str) -> tuple[list[str], list[bool], list[bool]]:
     """The table's lines, and per row whether the issue's goals are met as written and with the family's σ
-    scale judged by RMS(err/σ) in [0.7, 1.5] instead of median σ / RMS error."""
+    scale judged by 1 / RMS(err/σ) in [0.7, 1.5] (RMS(err/σ) in [0.67, 1.43]) instead of median σ / RMS error."""
     col, sig_col, truth = {"v_r": ("v_r_mps", "sigma_v_r_mps", "v_r_true_mps"),
                            "range": ("range_m", "sigma_range_m", "range_true_m"),
                            "v_r_bank": ("v_r_bank_mps", "sigma_v_r_bank_mps", "v_r_true_mps")}[what]
@@ -246,7 +246,8 @@ def _report(rows: list[dict], title: str) -> str:
                "also median σ / RMS error in [0.7, 1.5]. 'same, σ exact' is what that ratio would be for these σ's "
                "were every error drawn from its own σ: a family whose σ's span decades (tone rows among whole-frame "
                "ones) cannot reach 0.7 however right each σ is, so the σ scale is also judged by RMS(err/σ) "
-               "(1 when calibrated; below 0.7 is σ inflated, above 1.5 too small) in the last column.\n")
+               "(1 when calibrated) in the last column: its inverse, σ over error as the ratio above, in [0.7, 1.5], "
+               "i.e. RMS(err/σ) from 0.67 (below: σ inflated) to 1.43 (above: σ too small).\n")
     goals, goals_z = [], []
     for what, scale, unit in (("v_r", 1e3, "mm/s"), ("range", 1e3, "mm")):
         lines, met, met_z = _calibration_lines(rows, what, scale, unit)
