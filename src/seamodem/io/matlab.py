@@ -263,7 +263,7 @@ def refuse_huge_rate(rate_hz: float, what: str, hint: str = "") -> None:
     what : str
         What gave it: a file, ``stdin``, ``sample-rate``; it opens the message.
     hint : str
-        Appended to the message, e.g. ``"; give --sample-rate"``.
+        Appended to the message, e.g. ``" (a damaged file?); give --sample-rate"``.
 
     Raises
     ------
