@@ -159,6 +159,11 @@ _DECISIONS_MAX_FOLLOW = 1.5
 #: decoded frames whose echoes pull a later undecoded frame's pilot arrival (``pooled_pilot_pull_s``)
 _ECHO_POOL_FRAMES = 5
 
+def _root_mean_excess(gaps) -> float:
+    """√ of the mean of squared gaps less their σ's (unbiased, unclipped), clipped at 0; 0 with none."""
+    return math.sqrt(max(0.0, float(np.mean(gaps)))) if len(gaps) else 0.0
+
+
 #: the pilot bank's σ column takes the error its gaps to the last decoded frames' fits show once this many are in
 #: (``FrameMeasurer.bank_excess_mps``; before, the bound of the echoes a frame's fit shows over the pilot)
 BANK_GAP_MIN_FRAMES = 3
@@ -1079,7 +1084,6 @@ def fit_echo_dopplers(wf: WholeFrameFit, first: int) -> tuple[np.ndarray, np.nda
             np.asarray(wf.sigma_v_mps, float)[others], np.asarray(wf.sigma_delay_s, float)[others])
 
 
-
 def unmodelled_pull_s(lags_s: np.ndarray, gains: np.ndarray, modelled_s: np.ndarray, config: FrameConfig,
                       pilot: np.ndarray, *, eps: float = 0.0) -> float:
     """σ [s] of the pilot's arrival from echoes (lags after the first path, gains relative to it) that its
@@ -1412,7 +1416,7 @@ class FrameMeasurer:
         """The pilot bank's Doppler error beyond its noise [m/s], as the last decoded frames' gaps to their
         whole-frame fits showed it (the root of their mean, clipped at 0); ``bound_mps`` (a bound the frame's
         own fit gives) while fewer than :data:`BANK_GAP_MIN_FRAMES` frames are in, the larger then."""
-        shown = math.sqrt(max(0.0, float(np.mean(self._bank_gaps)))) if self._bank_gaps else 0.0
+        shown = _root_mean_excess(self._bank_gaps)
         return shown if len(self._bank_gaps) >= BANK_GAP_MIN_FRAMES else max(shown, bound_mps)
 
     def _frame_to_frame(self, wf: WholeFrameFit, first: int, range_m: float) -> None:
@@ -1537,7 +1541,7 @@ class FrameMeasurer:
             # their whole frame's, beyond both σ's, are this channel's (an impulsive recording's surface echo
             # −0.93 at 107 µs ≈ 1/B: the decoded frames' fits resolved it, the pilot's arrivals of the frames
             # not decoded were 16–47 mm short with σ 7–8 mm)
-            sigma_tau = math.hypot(sigma_tau, math.sqrt(max(0.0, float(np.mean(self._pilot_gaps)))))
+            sigma_tau = math.hypot(sigma_tau, _root_mean_excess(self._pilot_gaps))
         noise_tau = sigma_tau  # the arrival's σ of noise, frame to frame (RecordLookahead's kinematic check)
         # (the fit's own, the one its v_r took, the merged image its Doppler term used): RecordLookahead
         fade_rates = doppler.pop("fade_rates_hz", None)
@@ -1858,18 +1862,19 @@ class FrameMeasurer:
             # (the bank's σ with the pull of the echoes the fit sees over the pilot: without it, the steep
             # family's decoded rows took 40–110 mm/s of σ from a bank 0.1 m/s off, their error 0.1–0.9 mm/s)
             # (the tone referees the gap: bank_gap_sigmas_mps; the bank's own σ column covers it too)
-            sigma_bank_noise, echo_bound = sigma_bank, bank_echo_sigma_mps(wf, first, self.config)
-            sigma_fit_noise = float(wf.sigma_v_mps[first]) * inflation
-            sigma_bank = math.hypot(sigma_bank, echo_bound)
-            sigma_pre_gap = sigma
-            sigma, sigma_bank = bank_gap_sigmas_mps(v, sigma, float(m.pilot.v_mps), sigma_bank, v_tone, sigma_tone)
+            v_bank, echo_bound = float(m.pilot.v_mps), bank_echo_sigma_mps(wf, first, self.config)
+            sigma_fit = sigma
+            sigma, _ = bank_gap_sigmas_mps(v, sigma_fit, v_bank, math.hypot(sigma_bank, echo_bound), v_tone,
+                                           sigma_tone)
             # the bank's own column. Its error beyond its noise, measured: the last decoded frames' gaps to their
             # fits (this one's in), where the echoes' bound above is a bound (the corpus's steep family: banks
-            # 17–64 mm/s RMS off against a bound of 80–99 mm/s); the bound while fewer frames are in
+            # 17–64 mm/s RMS off against a bound of 80–99 mm/s); the bound while fewer frames are in. This
+            # frame's own gap beyond 3 combined σ, when the tone sides with the fit, as above
             if source == "whole_frame":
-                self._bank_gaps.append((v - float(m.pilot.v_mps)) ** 2 - sigma_fit_noise**2 - sigma_bank_noise**2)
-            column = math.hypot(sigma_bank_noise, self.bank_excess_mps(echo_bound))
-            _, column = bank_gap_sigmas_mps(v, sigma_pre_gap, float(m.pilot.v_mps), column, v_tone, sigma_tone)
+                sigma_fit_noise = float(wf.sigma_v_mps[first]) * inflation
+                self._bank_gaps.append((v - v_bank) ** 2 - sigma_fit_noise**2 - sigma_bank**2)
+            column = math.hypot(sigma_bank, self.bank_excess_mps(echo_bound))
+            _, column = bank_gap_sigmas_mps(v, sigma_fit, v_bank, column, v_tone, sigma_tone)
             # and the channel's wander the fit shows (fading, a merged image's Doppler), which is no Doppler and
             # moves the pilot's 23 ms as it moves the frame (the corpus's far family: banks 20–35 mm/s off with
             # σ 6–8 mm/s, the fit's σ 8.5 mm/s of these terms). Not in the gaps: the two estimates share it
