@@ -96,6 +96,34 @@ def test_echo_patterns_of_other_channels_give_no_depths():
                               **kw) is None
 
 
+def test_an_echo_whose_doppler_was_not_measured_is_not_grazing_in_either_test():
+    # the depth solve and the thin waveguide's gate share one predicate (echo_geometry.grazing): a pattern echo
+    # with a NaN Doppler gap or σ gives no depths (before: the solve's "gap > bound" let NaN through as grazing,
+    # while thin_waveguide's "gap <= bound" did not)
+    from types import SimpleNamespace
+
+    from seamodem.receive.echo_geometry import grazing
+    from seamodem.receive.frame import thin_waveguide
+
+    lags = exact_lags(3.0, 4.0, 15.0, 800.0)
+    echoes, gains = [lags["B"], lags["SB"], lags["BS"]], [0.6, 0.5, 0.55]
+    kw = dict(config=CFG, sound_speed_mps=C)
+    assert depths_from_echoes(echoes, gains, 800.0, doppler_gaps_mps=[0.01, 0.0, 0.02],
+                              sigma_v_mps=[0.005] * 3, **kw) is not None
+    for gaps, sig in (([0.01, float("nan"), 0.02], [0.005] * 3), ([0.01, 0.0, 0.02], [0.005, float("nan"), 0.005])):
+        assert depths_from_echoes(echoes, gains, 800.0, doppler_gaps_mps=gaps, sigma_v_mps=sig, **kw) is None
+    assert grazing([0.06, -0.06, 0.2], [0.01, 0.0, float("inf")]).tolist() == [True, False, True]
+
+    def fit(v_echo: float) -> SimpleNamespace:  # a direct path and one echo 2/B behind, 0.8 of it
+        return SimpleNamespace(delays_s=np.array([0.0, 2 / CFG.bandwidth_hz]), amplitudes=np.array([1.0, 0.8]),
+                               v_mps=np.array([1.0, v_echo]), sigma_v_mps=np.array([0.002, 0.002]),
+                               sigma_delay_s=np.array([1e-6, 1e-6]))
+
+    assert thin_waveguide(fit(1.01), 0, CFG)
+    assert not thin_waveguide(fit(1.3), 0, CFG)
+    assert not thin_waveguide(fit(float("nan")), 0, CFG)
+
+
 def test_the_pool_takes_the_median_of_the_frames_that_show_the_pattern():
     lags = exact_lags(3.0, 4.0, 15.0, 800.0)
     good = (np.array([lags["B"], lags["SB"], lags["BS"]]), np.array([0.6, 0.5, 0.5]))

@@ -54,6 +54,20 @@ _MATCH_B = 0.5
 #: [m/s], beyond three of the fit's σ (the far family's echoes: 0–0.03 m/s; the steep family's, circling
 #: 8–15 m from the beacon: 0.07–0.5 m/s at the 5th–75th percentiles)
 GRAZING_DOPPLER_MPS = 0.05
+
+
+def grazing(doppler_gaps_mps, sigma_v_mps) -> np.ndarray:
+    """Which echoes travel parallel to the direct path: their Doppler less its (``doppler_gaps_mps`` [m/s])
+    within :data:`GRAZING_DOPPLER_MPS` and three of its σ (``sigma_v_mps``). An echo whose Doppler or σ is
+    NaN (not measured) is not: nothing shows that it grazes (the one test of :func:`depths_from_echoes` and
+    ``frame.thin_waveguide``).
+
+    >>> grazing([0.01, -0.2, float("nan")], [0.01, 0.01, 0.01]).tolist()
+    [True, False, False]
+    """
+    gaps = np.abs(np.asarray(doppler_gaps_mps, float))
+    with np.errstate(invalid="ignore"):
+        return gaps <= GRAZING_DOPPLER_MPS + 3 * np.asarray(sigma_v_mps, float)
 #: the farthest of the three images' vertical distance (2H + |z_b − z_v|) at most this share of the range: the
 #: paraxial lags within 2 % (a steep channel's first echoes, 8–10 ms behind at 11 m, are no such images)
 _PARAXIAL = 0.3
@@ -116,7 +130,8 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
     pattern of a merged surface image (the module's docstring). ``lead_s``: how late the fit's first path is
     on the direct path (the merged image's bias), added to every lag. ``doppler_gaps_mps``, ``sigma_v_mps``:
     each echo's Doppler less the first path's and its σ [m/s] (a pattern echo beyond
-    :data:`GRAZING_DOPPLER_MPS` and three σ of it is not grazing); ``sigma_lags_s``: the lags' σ [s].
+    :data:`GRAZING_DOPPLER_MPS` and three σ of it, or NaN, is not grazing: :func:`grazing`); ``sigma_lags_s``:
+    the lags' σ [s].
 
     Where the two surface–bottom images are within 1/B of each other (the ends' depths within
     s/(8H·B) of each other) the fit holds one echo for both, at about their mean lag: their split is
@@ -132,7 +147,7 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
     lags = np.asarray(lags_s, float)
     gains = np.asarray(gains, float)
     n = lags.size
-    gaps = np.zeros(n) if doppler_gaps_mps is None else np.abs(np.asarray(doppler_gaps_mps, float))
+    gaps = np.zeros(n) if doppler_gaps_mps is None else np.asarray(doppler_gaps_mps, float)
     sig_v = np.zeros(n) if sigma_v_mps is None else np.asarray(sigma_v_mps, float)
     one_b = 1.0 / config.bandwidth_hz
     sig_lag = np.full(n, _LAG_FLOOR_B * one_b) if sigma_lags_s is None else np.maximum(
@@ -153,7 +168,7 @@ def depths_from_echoes(lags_s, gains, range_m: float, *, config: FrameConfig, so
         ratios = gains[idx[1:]] / gains[idx[0]]
         if np.any(ratios < low) or np.any(ratios > high):
             return None
-        if np.any(gaps[idx] > GRAZING_DOPPLER_MPS + 3 * sig_v[idx]):
+        if not np.all(grazing(gaps[idx], sig_v[idx])):
             return None
         if merged:
             a, m = lg

@@ -34,7 +34,7 @@ from ..transmit.pilot import pilot_symbols
 from .bounds import delay_crlb_s, pilot_velocity_crlb_mps, tone_velocity_crlb_mps
 from .demodulate import FrameDecode, demodulate, payload_fields
 from .detect import Detection
-from .echo_geometry import GEOMETRY_MIN_GAIN, GRAZING_DOPPLER_MPS, ImageDepths, pooled_depths
+from .echo_geometry import GEOMETRY_MIN_GAIN, ImageDepths, grazing, pooled_depths
 from .frontend import FrontEndPlan, plan_front_end
 from .impulse import ImpulseBlanker
 from .measure import FrameMeasurement, frame_span_s, impulse_excess, measure_frame
@@ -797,7 +797,8 @@ _THIN_WAVEGUIDE_B = 3.0
 def thin_waveguide(wf: WholeFrameFit, first: int, config: FrameConfig) -> bool:
     """Whether the fit holds an echo of a waveguide thin against the range: a path at least
     ``GEOMETRY_MIN_GAIN`` of the direct one's, within :data:`_THIN_WAVEGUIDE_B`/B after it, whose Doppler is
-    the direct path's within ``GRAZING_DOPPLER_MPS`` and three of its σ (it travels parallel to it).
+    the direct path's within ``GRAZING_DOPPLER_MPS`` and three of its σ (it travels parallel to it:
+    :func:`~seamodem.receive.echo_geometry.grazing`).
 
     The images of such a waveguide all lie within a few 1/B (method of images: paraxial lags of 2·z·z'/(c·R)),
     the nearest before the first one resolved; unresolved (within 1/B), it merges with the direct path, and
@@ -811,7 +812,7 @@ def thin_waveguide(wf: WholeFrameFit, first: int, config: FrameConfig) -> bool:
     lags, gains = echoes
     dv, sigma_v, _ = fit_echo_dopplers(wf, first)
     near = ((lags > 0) & (lags <= _THIN_WAVEGUIDE_B / config.bandwidth_hz) & (gains >= GEOMETRY_MIN_GAIN)
-            & (np.abs(dv) <= GRAZING_DOPPLER_MPS + 3 * sigma_v))
+            & grazing(dv, sigma_v))
     return bool(np.any(near))
 
 
