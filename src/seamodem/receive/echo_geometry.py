@@ -68,6 +68,8 @@ def grazing(doppler_gaps_mps, sigma_v_mps) -> np.ndarray:
     gaps = np.abs(np.asarray(doppler_gaps_mps, float))
     with np.errstate(invalid="ignore"):
         return gaps <= GRAZING_DOPPLER_MPS + 3 * np.asarray(sigma_v_mps, float)
+
+
 #: the farthest of the three images' vertical distance (2H + |z_b − z_v|) at most this share of the range: the
 #: paraxial lags within 2 % (a steep channel's first echoes, 8–10 ms behind at 11 m, are no such images)
 _PARAXIAL = 0.3
