@@ -159,6 +159,7 @@ _DECISIONS_MAX_FOLLOW = 1.5
 #: decoded frames whose echoes pull a later undecoded frame's pilot arrival (``pooled_pilot_pull_s``)
 _ECHO_POOL_FRAMES = 5
 
+
 def _root_mean_excess(gaps) -> float:
     """√ of the mean of squared gaps less their σ's (unbiased, unclipped), clipped at 0; 0 with none."""
     return math.sqrt(max(0.0, float(np.mean(gaps)))) if len(gaps) else 0.0
