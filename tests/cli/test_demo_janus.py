@@ -125,7 +125,9 @@ def test_frame_demo_writes_what_it_wrote_before_the_waveform_option(tmp_path):
     sigma_range_m ≤ 1e-5; the tracks equal to 1e-9), and in session 15 for the paths' joint delay σ
     (sigma_range_m ≤ 9e-5 relative; the tracks equal to 1e-9), and in session 27 for the echo recalled from
     the last decoded frame (one frame fitted with one path more: range 0.03 mm, v_r 0.04 mm/s, σ's ≤ 3e-3
-    relative; the tracks within 0.3 mm). Rewrite them
+    relative; the tracks within 0.3 mm), and in session 36 for the delay's σ without the known symbols'
+    intersymbol terms and without the direct path as its own precursor (sigma_range_m 0.77–0.92 of before;
+    the tracks equal to 1e-9). Rewrite them
     (``seamodem demo --duration 6 --no-plots -q -o DIR``) only for a change that is meant to alter them."""
     out = tmp_path / "demo"
     assert main(["demo", "--duration", "6", "--no-plots", "-q", "-o", str(out)]) == 0

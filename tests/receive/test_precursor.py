@@ -78,3 +78,21 @@ def test_a_noise_peak_a_pilot_length_early_is_not_taken_for_the_arrival():
     for k in (4, 5):
         err = rows[k]["range_m"] - rows[k]["range_true_m"]
         assert abs(err) <= 3 * rows[k]["sigma_range_m"], (k, err, rows[k]["sigma_range_m"])
+
+
+def test_the_direct_path_refitted_with_its_echoes_is_not_its_own_precursor():
+    # the echoes' search fits the direct path again and keeps the arrival fit's first_s: its own delay moves by
+    # up to a few µs, and read against first_s a direct path refitted earlier counted as a path before itself,
+    # its gap the range's σ (the corpus's steep family: 0.05–3.1 mm on ranges within 1.5 mm)
+    from types import SimpleNamespace
+
+    from seamodem.receive.frame import earlier_path_gap_s
+    from seamodem.receive.multipath import PathFit
+
+    t0 = 0.2
+    refitted = PathFit(delays_s=np.array([t0 - 1.2e-6, t0 + 3.1e-3]), amplitudes=np.ones(2, complex), first_s=t0)
+    assert earlier_path_gap_s(SimpleNamespace(echoes=refitted, paths=None)) == 0.0
+    # a path 0.4 ms before the direct one is a precursor: its gap stays (from the direct path's own delay)
+    early = PathFit(delays_s=np.array([t0 - 4e-4, t0 - 1.2e-6, t0 + 3.1e-3]), amplitudes=np.ones(3, complex),
+                    first_s=t0)
+    assert earlier_path_gap_s(SimpleNamespace(echoes=early, paths=None)) == pytest.approx(4e-4 - 1.2e-6, rel=1e-12)
