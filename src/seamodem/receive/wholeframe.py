@@ -1032,13 +1032,13 @@ def fit_whole_frame(
     # in, they were the scatter at high SNR and no error of the arrival: a lone path at 25 dB, σ 2.7–3.3 times
     # its CRLB (the corpus's steep family with its echoes removed, 8–17 dB: 1.4–1.5 times, lag-one correlation
     # of the segments' timings −0.26, the errors at 0.95 of the CRLB; tests/receive/test_wholeframe.py). The
-    # path's own outputs are its gain (Nyquist pulses: no intersymbol term at the symbol instants)
+    # path's own outputs are its gain (Nyquist pulses: no intersymbol term at the symbol instants), and what is
+    # left once its own model is out of the frame the others' are out of is the residual of all paths
+    resid = seg_bb - total
     for p in range(n_paths):
-        own = models[p] if n_paths > 1 else total
-        z_res, dz_res, _ = outputs(p, (seg_bb - (total - own) if n_paths > 1 else seg_bb) - own)
+        z_res, dz_res, _ = outputs(p, resid)
         sigma_d[p] = timing_fit(z_res + amps[p], dz_res, p)[1]
     # noise per matched-filter output from the residual of all paths, at the first path's instants
-    resid = seg_bb - total
     inst = symbol_instants(config, delays[0], eps[0], beta[0])[ref_idx]
     noise = seg.filter(resid, inst, scale=1 + eps[0], offset_hz=f0 * eps[0], t_ref_s=delays[0])
     noise_var = max(float(np.mean(np.abs(noise) ** 2)), np.finfo(float).tiny)
