@@ -37,6 +37,7 @@ known signal at the path's measured Es/N0 (Rife & Boorstyn, SPEC §6).
 from __future__ import annotations
 
 import cmath
+import functools
 import math
 from dataclasses import dataclass
 
@@ -50,7 +51,7 @@ from .measure import power_excess
 from .multipath import raised_cosine
 
 __all__ = ["WholeFrameFit", "channel_bend_s2", "fit_whole_frame", "known_signal_velocity_crlb_mps", "split_clusters",
-           "subband_bend", "unmodelled_paths", "earlier_path"]
+           "subband_bend", "unmodelled_paths", "earlier_path", "intersymbol_slopes"]
 
 
 @dataclass(frozen=True)
@@ -281,6 +282,43 @@ def joint_delay_sigma_s(sigma_s, delays_s, amplitudes, *, config: FrameConfig, v
     kappa = joint_delay_inflation(d, amplitudes, config=config, v_mps=v_mps, sound_speed_mps=sound_speed_mps)
     gaps = np.abs(d[None, :] - d[:, None]) + np.diag(np.full(d.size, np.inf))
     return np.minimum(sigma * np.sqrt(kappa), np.maximum(sigma, gaps.min(axis=1)))
+
+
+@functools.lru_cache(maxsize=8)
+def _raised_cosine_slopes(rolloff: float, reach: int) -> np.ndarray:
+    """r′(n), n = 1 … ``reach``: the slope of the raised cosine r(u) (unit peak, u in symbols) at whole
+    symbols, from its spectrum (the square of the SRRC's, as the matched filter's outputs see a path): odd in n."""
+    f = np.linspace(-(1 + rolloff) / 2, (1 + rolloff) / 2, 8193)
+    w = srrc_spectrum(f, 1.0, rolloff) ** 2
+    w = w / np.trapezoid(w, f)
+    n = np.arange(1, reach + 1)[:, None]
+    return -np.trapezoid(2 * np.pi * f * w * np.sin(2 * np.pi * f * n), f, axis=1)
+
+
+def intersymbol_slopes(symbols: np.ndarray, ref_idx: np.ndarray, config: FrameConfig, scale: float,
+                       reach: int = 32) -> np.ndarray:
+    """The known symbols' terms in a unit-gain path's stripped derivative outputs at the reference symbols k
+    [1/s]: conj(x_k)·Σ_{n≠0} x_{k−n}·r′(n)/T′, T′ the symbol period over ``scale`` (1 + v/c).
+
+    At the right instants a path's matched-filter outputs hold no other symbol (Nyquist pulses), but their
+    time derivatives do: r′ at whole symbols is odd and not zero. Over a run of symbols the pairs within it
+    cancel, and those across its two ends remain.
+
+    >>> from seamodem import get_preset
+    >>> cfg = get_preset("jmse2024")
+    >>> x = np.array([1, 1, -1, 1, -1, -1, 1, 1], complex)
+    >>> k = intersymbol_slopes(x, np.arange(8), cfg, 1.0)
+    >>> bool(abs(k.sum()) < 1e-9 * np.abs(k).sum())  # a whole run: its pairs cancel
+    True
+    """
+    x = np.asarray(symbols, dtype=complex)
+    slopes = _raised_cosine_slopes(float(config.rolloff), int(reach)) * scale / config.symbol_period_s
+    padded = np.concatenate([np.zeros(reach, complex), x, np.zeros(reach, complex)])
+    k = np.asarray(ref_idx) + reach
+    acc = np.zeros(k.size, complex)
+    for n, r in enumerate(slopes, start=1):
+        acc += r * (padded[k - n] - padded[k + n])
+    return acc * np.conj(x[np.asarray(ref_idx)])
 
 
 def symbol_instants(config: FrameConfig, delay_s: float, eps: float, beta: float) -> np.ndarray:
@@ -942,6 +980,7 @@ def fit_whole_frame(
 
     sigma_b = np.full(n_paths, math.inf)
     sigma_d = np.full(n_paths, math.inf)
+    last_outputs: dict = {}
     last_phase: dict = {}
     last_timing: dict = {}
     quarter = config.symbol_period_s / 4
@@ -954,6 +993,7 @@ def fit_whole_frame(
         moved = False
         for p in range(n_paths):
             z, dz, inst = outputs(p, seg_bb - (total - models[p]) if n_paths > 1 else seg_bb)
+            last_outputs[p] = (z, dz, 1 + eps[p])
             coef, sigma_b[p] = phase_fit(z, inst, p)
             delta, sigma_d[p] = timing_fit(z, dz, p)
             eps[p] += coef[1] / (2 * np.pi * f0)
@@ -1026,19 +1066,19 @@ def fit_whole_frame(
         sweep(update_delays=True)
     if n_paths == 1:
         total = model(0)
-    # each path's timing σ from its segments' scatter with its own model taken out of the derivative outputs:
-    # the known symbols' intersymbol terms there (the pulse's derivative at whole symbols, odd in the lag) sum
-    # over a segment to pairs across its two ends, which cancel between neighbours in the frame's mean. Left
-    # in, they were the scatter at high SNR and no error of the arrival: a lone path at 25 dB, σ 2.7–3.3 times
-    # its CRLB (the corpus's steep family with its echoes removed, 8–17 dB: 1.4–1.5 times, lag-one correlation
-    # of the segments' timings −0.26, the errors at 0.95 of the CRLB; tests/receive/test_wholeframe.py). The
-    # path's own outputs are its gain (Nyquist pulses: no intersymbol term at the symbol instants), and what is
-    # left once its own model is out of the frame the others' are out of is the residual of all paths
-    resid = seg_bb - total
-    for p in range(n_paths):
-        z_res, dz_res, _ = outputs(p, resid)
-        sigma_d[p] = timing_fit(z_res + amps[p], dz_res, p)[1]
+    # each path's timing σ from its segments' scatter without the known symbols' intersymbol terms in its
+    # derivative outputs (the pulse's derivative at whole symbols, odd in the lag: :func:`intersymbol_slopes`),
+    # which sum over a segment to pairs across its two ends and cancel between neighbours in the frame's mean.
+    # Left in, they were the scatter at high SNR and no error of the arrival: a lone path at 25 dB, σ 2.7–3.3
+    # times its CRLB (the corpus's steep family with its echoes removed, 8–17 dB: 1.4–1.5 times, lag-one
+    # correlation of the segments' timings −0.26, the errors at 0.95 of the CRLB; tests/receive/test_wholeframe.py).
+    # Taken out of the last pass's outputs at its gain, they give the σ that the path's own model taken out of
+    # the frame's residual does (within 0.1 %), without another filter pass
+    for p, (z, dz, scale) in last_outputs.items():
+        known = intersymbol_slopes(x, ref_idx, config, scale) * np.mean(z)
+        sigma_d[p] = timing_fit(z, dz - known, p)[1]
     # noise per matched-filter output from the residual of all paths, at the first path's instants
+    resid = seg_bb - total
     inst = symbol_instants(config, delays[0], eps[0], beta[0])[ref_idx]
     noise = seg.filter(resid, inst, scale=1 + eps[0], offset_hz=f0 * eps[0], t_ref_s=delays[0])
     noise_var = max(float(np.mean(np.abs(noise) ** 2)), np.finfo(float).tiny)
