@@ -1073,7 +1073,9 @@ def fit_whole_frame(
     # times its CRLB (the corpus's steep family with its echoes removed, 8–17 dB: 1.4–1.5 times, lag-one
     # correlation of the segments' timings −0.26, the errors at 0.95 of the CRLB; tests/receive/test_wholeframe.py).
     # Taken out of the last pass's outputs at its gain, they give the σ that the path's own model taken out of
-    # the frame's residual does (within 0.1 %), without another filter pass
+    # the frame's residual does, without another filter pass (which cost 10–12 % of the decoding receiver):
+    # within 0.1 % on analytic frames (one path and three, 10 and 25 dB); on a corpus seed's 600 rows the
+    # same ranges, range σ's median ratio 1.000, 4 rows 2–11 % apart (that pass's last update not in them)
     for p, (z, dz, scale) in last_outputs.items():
         known = intersymbol_slopes(x, ref_idx, config, scale) * np.mean(z)
         sigma_d[p] = timing_fit(z, dz - known, p)[1]
