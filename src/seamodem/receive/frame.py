@@ -191,8 +191,7 @@ def direct_path_share(m: FrameMeasurement) -> float:
     power = np.abs(np.asarray(paths.amplitudes)) ** 2
     if power.size < 2 or not np.all(np.isfinite(power)) or power.sum() <= 0:
         return 1.0
-    first = int(np.argmin(np.abs(np.asarray(paths.delays_s) - paths.first_s)))
-    return float(max(power[first] / power.sum(), 1e-3))
+    return float(max(power[direct_path_index(paths)] / power.sum(), 1e-3))
 
 
 #: a component of a decoded frame's residual before the direct path (``WholeFrameFit.earlier_path``) is a direct
@@ -272,16 +271,20 @@ def earlier_path_gap_s(m: FrameMeasurement) -> float:
     return max(0.0, float(own_arrival_s(paths) - np.min(delays)))
 
 
+def direct_path_index(paths) -> int:
+    """The index of the direct path in a pilot fit's paths: the path nearest its ``first_s``."""
+    return int(np.argmin(np.abs(np.asarray(paths.delays_s, dtype=float) - paths.first_s)))
+
+
 def own_arrival_s(paths) -> float:
-    """The direct path's arrival [s] in a pilot fit's own paths: the path nearest its ``first_s``.
+    """The direct path's arrival [s] in a pilot fit's own paths (:func:`direct_path_index`).
 
     The echoes' search (:func:`~seamodem.receive.multipath.find_echoes`) fits the direct path again with them
     and keeps the arrival fit's ``first_s`` (the origin of the pilot's outputs): the direct path's own delay
     there moves by up to a few µs (the corpus's steep family: −1.6 to +0.6 µs). Read against ``first_s``, a
     direct path refitted earlier was its own precursor, and its gap the largest term of the range's σ on 25
     of the steep family's 80 whole-frame rows logged on one seed (0.05–3.1 mm, errors within 1.5 mm)."""
-    delays = np.asarray(paths.delays_s, dtype=float)
-    return float(delays[np.argmin(np.abs(delays - paths.first_s))])
+    return float(np.asarray(paths.delays_s, dtype=float)[direct_path_index(paths)])
 
 
 def merged_image_delay_s(range_m: float, beacon_depth_m: float, vehicle_depth_m: float, *,
@@ -1519,8 +1522,7 @@ class FrameMeasurer:
         sigma_tau = float(delay_crlb_s(self.config, snr_direct_db)) * math.sqrt(excess)
         # the pilot fitted its paths together: an echo within the pulse's width trades its gain against the
         # arrival (an echo 0.3 at 100 µs: σ × 1.7–4)
-        pilot_first = int(np.argmin(np.abs(np.asarray(m.paths.delays_s) - m.paths.first_s))) \
-            if len(m.paths.delays_s) > 1 else 0
+        pilot_first = direct_path_index(m.paths) if len(m.paths.delays_s) > 1 else 0
         if len(m.paths.delays_s) > 1:
             sigma_tau = float(joint_delay_sigma_s(np.full(len(m.paths.delays_s), sigma_tau), m.paths.delays_s,
                                                   m.paths.amplitudes, config=self.config)[pilot_first])
