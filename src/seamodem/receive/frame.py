@@ -38,7 +38,7 @@ from .echo_geometry import GEOMETRY_MIN_GAIN, ImageDepths, grazing, pooled_depth
 from .frontend import FrontEndPlan, plan_front_end
 from .impulse import ImpulseBlanker
 from .measure import FrameMeasurement, frame_span_s, impulse_excess, measure_frame
-from .multipath import find_echoes, sidelobe_pull_s
+from .multipath import direct_path_index, find_echoes, sidelobe_pull_s
 from .records import MeasurementRecord
 from .settings import Emissions, ReceiverSettings
 from .two_way import two_way_range_m
@@ -269,11 +269,6 @@ def earlier_path_gap_s(m: FrameMeasurement) -> float:
     if delays.size == 0:
         return 0.0
     return max(0.0, float(own_arrival_s(paths) - np.min(delays)))
-
-
-def direct_path_index(paths) -> int:
-    """The index of the direct path in a pilot fit's paths: the path nearest its ``first_s``."""
-    return int(np.argmin(np.abs(np.asarray(paths.delays_s, dtype=float) - paths.first_s)))
 
 
 def own_arrival_s(paths) -> float:

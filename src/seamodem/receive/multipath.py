@@ -40,7 +40,7 @@ from ..dsp import UniformTable
 from .detect import pilot_template
 from .doppler import dichotomy_max, matched_filter, table_read
 
-__all__ = ["PathFit", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine", "sidelobe_pull_s"]
+__all__ = ["PathFit", "direct_path_index", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine", "sidelobe_pull_s"]
 
 #: pilot autocorrelation lags kept in the model (|ρ_d| ≪ Np beyond: well-chosen pilot)
 _SIDELOBE_LAGS = 12
@@ -77,6 +77,12 @@ class PathFit:
     delays_s: np.ndarray
     amplitudes: np.ndarray
     first_s: float
+
+
+def direct_path_index(paths: PathFit) -> int:
+    """The index of the direct path in a pilot fit's paths: the path nearest its ``first_s`` (after
+    :func:`find_echoes`, which keeps the arrival fit's ``first_s``, not exactly the direct path's delay)."""
+    return int(np.argmin(np.abs(np.asarray(paths.delays_s, dtype=float) - paths.first_s)))
 
 
 #: table points per symbol of the pilot-correlation response R (linear interpolation error ≈ 5e-6 of R(0))
@@ -379,7 +385,7 @@ def direct_path_doppler(
     lags = np.arange(-(n_p - 1), n_p) * T
     columns = [np.convolve(a, raised_cosine(lags - (d - paths.first_s), T, config.rolloff))[n_p - 1 : 2 * n_p - 1]
                for d in paths.delays_s]
-    first = int(np.argmin(np.abs(paths.delays_s - paths.first_s)))
+    first = direct_path_index(paths)
     if echo_drift:
         t_rel = (np.arange(n_p) - (n_p - 1) / 2) / n_p  # symbol time over the pilot, centred, in pilot lengths
         columns += [columns[p] * t_rel for p in range(len(columns)) if p != first]
