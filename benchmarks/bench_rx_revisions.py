@@ -8,7 +8,9 @@ array; 20 LFM pings) are made once with the first revision; the first is also ru
 depths given (the merged surface image modelled, the whole-frame fit's clusters split). Each mode runs once per revision to warm
 the numba caches, then ``--repeats`` times interleaved. The CPU time is the child's user + system
 time (os.wait4), far less sensitive to the shared machine's load than the wall time; both are
-printed as real-time factors (recording seconds per processing second), medians.
+printed as real-time factors (recording seconds per processing second), medians. A mode a revision
+cannot run (an option it predates, e.g. ``--beacon-depth`` before issue 25) fails in its warm-up run and
+is shown as "–" for that revision, without its ratio.
 """
 
 from __future__ import annotations
@@ -60,13 +62,20 @@ def rx_speed(trees: dict[str, Path], work: Path, *, repeats: int = 3) -> str:
              "--array tetra (decoding)": [work / "r4.wav", "--array", "tetra:0.08"],
              "--reference lfm": [work / "p_rx.wav", "--reference", work / "p_rx.json"]}
     times = {(m, r): [] for m in modes for r in trees}
-    for a in modes.values():
-        for tree in trees.values():
-            run(tree, "rx", *a, "-o", work / "x.csv", "-q")
+    runs = set()  # (mode, revision) that ran its warm-up
+    for m, a in modes.items():
+        for r, tree in trees.items():
+            try:
+                run(tree, "rx", *a, "-o", work / "x.csv", "-q")
+            except RuntimeError as err:
+                print(f"{r}: {m} not run ({err})", file=sys.stderr)
+            else:
+                runs.add((m, r))
     for _ in range(repeats):
         for m, a in modes.items():
             for r, tree in trees.items():
-                times[(m, r)].append(run(tree, "rx", *a, "-o", work / "x.csv", "-q"))
+                if (m, r) in runs:
+                    times[(m, r)].append(run(tree, "rx", *a, "-o", work / "x.csv", "-q"))
     lines = [f"# seamodem rx real-time factors, {duration:.0f} s recordings, median of {repeats} "
              f"interleaved runs (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)\n",
              "| mode | " + " | ".join(f"{r} CPU / wall" for r in trees) + " | speed last vs first (CPU) |",
@@ -74,11 +83,16 @@ def rx_speed(trees: dict[str, Path], work: Path, *, repeats: int = 3) -> str:
     for m in modes:
         cells, cpus = [], []
         for r in trees:
+            if not times[(m, r)]:
+                cells.append("–")
+                cpus.append(None)
+                continue
             wall = statistics.median(t[0] for t in times[(m, r)])
             cpu = statistics.median(t[1] for t in times[(m, r)])
             cpus.append(cpu)
             cells.append(f"{duration / cpu:.1f}x / {duration / wall:.1f}x")
-        lines.append(f"| {m} | " + " | ".join(cells) + f" | {cpus[0] / cpus[-1]:.2f} |")
+        ratio = "–" if None in (cpus[0], cpus[-1]) else f"{cpus[0] / cpus[-1]:.2f}"
+        lines.append(f"| {m} | " + " | ".join(cells) + f" | {ratio} |")
     return "\n".join(lines)
 
 
