@@ -40,7 +40,8 @@ from ..dsp import UniformTable
 from .detect import pilot_template
 from .doppler import dichotomy_max, matched_filter, table_read
 
-__all__ = ["PathFit", "direct_path_index", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine", "sidelobe_pull_s"]
+__all__ = ["PathFit", "direct_path_index", "fit_paths", "find_echoes", "direct_path_doppler", "raised_cosine",
+           "sidelobe_pull_s"]
 
 #: pilot autocorrelation lags kept in the model (|ρ_d| ≪ Np beyond: well-chosen pilot)
 _SIDELOBE_LAGS = 12
