@@ -37,6 +37,55 @@ def dies_once(task):
     return index
 
 
+def makes_a_progress_bar(task):
+    """Create and close a (disabled) progress bar, as each decoding task's reader does."""
+    from seamodem._progress import progress_bar
+
+    with progress_bar(total=1, desc="task", enabled=False) as bar:
+        bar.update()
+    return task
+
+
+def _take_and_die(lock):
+    lock.acquire()
+    os._exit(0)
+
+
+def test_a_process_that_died_holding_the_progress_bars_lock_does_not_stall_the_workers(monkeypatch):
+    """tqdm's default lock holds a semaphore every forked process shares, and every bar takes it to be created.
+    A worker terminated while it held it (a broken pool terminates the others) left the batch's replacement
+    worker waiting in its reader's bar for good: the suite hung in
+    test_worker_killed_while_decoding_a_file_then_the_file_is_retried. Workers take a lock of their own."""
+    import multiprocessing
+    import threading
+
+    from tqdm import tqdm
+    from tqdm.auto import tqdm as auto_tqdm
+    from tqdm.std import TqdmDefaultWriteLock
+
+    from seamodem.batch.runner import _run_processes
+
+    ctx = multiprocessing.get_context("fork")
+    shared = ctx.Lock()  # tqdm's is a shared RLock; a plain one, so that the test can free it if it fails
+    monkeypatch.setattr(TqdmDefaultWriteLock, "mp_lock", shared, raising=False)
+    for cls in {tqdm, auto_tqdm}:
+        monkeypatch.setattr(cls, "_lock", TqdmDefaultWriteLock(), raising=False)
+    dead = ctx.Process(target=_take_and_die, args=(shared,))
+    dead.start()
+    dead.join()
+    results = []
+    runner = threading.Thread(target=_run_processes, args=(makes_a_progress_bar, [0, 1, 2], 2, 0, results.append),
+                              daemon=True)
+    runner.start()
+    runner.join(timeout=60)
+    stalled = runner.is_alive()
+    if stalled:
+        shared.release()  # the workers go on, and the pool shuts down
+        runner.join()
+    assert not stalled, "the workers waited for the progress bars' lock a dead process held"
+    assert sorted(r.value for r in results) == [0, 1, 2]
+
+
 def always_dies(task):
     if task == 2:
         os._exit(1)

@@ -251,13 +251,37 @@ def _one_thread_per_worker() -> None:
     threadpool_limits(1)
 
 
+def _own_progress_lock() -> None:
+    """Each worker process's progress bars take a lock of its own, not the one its parent shares.
+
+    tqdm's default lock holds a multiprocessing semaphore that every forked process shares, and every bar
+    takes it to be created, a disabled one too (the reader's in each decoding task). A worker that dies or
+    is terminated while it holds it (a broken pool terminates the others) leaves it taken for good: every
+    other process then waits at its next bar. A batch hung so, its replacement worker waiting in its
+    reader's bar (``tests/batch/test_batch_runner.py``). A worker's bars write nowhere a parent's do.
+    """
+    import threading
+
+    from tqdm import tqdm
+    from tqdm.auto import tqdm as auto_tqdm
+
+    for cls in {tqdm, auto_tqdm}:
+        cls.set_lock(threading.RLock())
+
+
+def _worker_init() -> None:
+    """A worker process's set-up: :func:`_one_thread_per_worker`, :func:`_own_progress_lock`."""
+    _one_thread_per_worker()
+    _own_progress_lock()
+
+
 def _run_processes(fn, tasks, workers: int, retries: int, done) -> None:
     """A pool of ``workers`` processes; tasks lost with a dead worker are rerun alone, then reported."""
     attempts = [0] * len(tasks)
     queue = deque(range(len(tasks)))
     lost: list[int] = []
     ctx = _context()
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_one_thread_per_worker)
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init)
     running: dict = {}
     try:
         while queue or running:
@@ -282,7 +306,7 @@ def _run_processes(fn, tasks, workers: int, retries: int, done) -> None:
                 lost.extend(running.values())
                 running.clear()
                 pool.shutdown(wait=False, cancel_futures=True)
-                pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_one_thread_per_worker)
+                pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
     _rerun_alone(fn, tasks, sorted(lost), attempts, workers, retries, ctx, done)
@@ -300,7 +324,7 @@ def _rerun_alone(fn, tasks, lost: list[int], attempts: list[int], workers: int, 
                     done(TaskResult(i, False, None, f"worker process died ({attempts[i]} attempts)", attempts[i]))
                     continue
                 attempts[i] += 1
-                pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_one_thread_per_worker)
+                pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_worker_init)
                 running[pool.submit(_guarded, fn, tasks[i])] = (i, pool)
             if not running:
                 break
