@@ -28,11 +28,10 @@ from functools import lru_cache
 
 import numpy as np
 import scipy.fft
-import scipy.signal
 from numba import njit
 
 from ..config import FrameConfig
-from ..dsp import UniformTable
+from ..dsp import UniformTable, windowed_sinc_lowpass
 from ..transmit.frame import tone_envelope
 from ..transmit.pulse import srrc_pulse, srrc_truncation_energy
 
@@ -562,8 +561,8 @@ def tone_track_eq9(
     cut-off f_max = v_max f_pt / c (paper 000 eq 9, paper 002 §II.B).
     """
     half = max(1, int(math.ceil(2 * fs / f_max_hz)))
-    taps = scipy.signal.firwin(2 * half + 1, min(f_max_hz, 0.45 * fs), fs=fs)
-    xf = scipy.signal.oaconvolve(x, taps, mode="same")
+    taps = windowed_sinc_lowpass(2 * half + 1, min(f_max_hz, 0.45 * fs), fs, np.hamming(2 * half + 1))
+    xf = np.convolve(x, taps)[half : half + len(x)]  # "same": the full convolution's centre (a frame's tone, short)
     v = sound_speed_mps * fs / (2 * np.pi * tone_hz) * np.angle(xf[1:] * np.conj(xf[:-1]))
     return v, half
 
