@@ -1068,8 +1068,10 @@ def fit_whole_frame(
     # the frame's residual does, without another filter pass (which cost 10–12 % of the decoding receiver):
     # within 0.1 % on analytic frames (one path and three, 10 and 25 dB); on a corpus seed's 600 rows the
     # same ranges, range σ's median ratio 1.000, 4 rows 2–11 % apart (that pass's last update not in them)
+    # (the terms scale with the path's time scale alone: the symbols' sums once per fit, at scale 1)
+    unit_slopes = intersymbol_slopes(x, ref_idx, config, 1.0) if last_outputs else None
     for p, (z, dz, scale) in last_outputs.items():
-        known = intersymbol_slopes(x, ref_idx, config, scale) * np.mean(z)
+        known = unit_slopes * (scale * np.mean(z))
         sigma_d[p] = timing_fit(z, dz - known, p)[1]
     # noise per matched-filter output from the residual of all paths, at the first path's instants
     resid = seg_bb - total
